@@ -1,0 +1,118 @@
+"""The ``tailor`` command: a thin shell over the library.
+
+Every :class:`~tailor.errors.TailorError` becomes one line on stderr and exit status 2; the
+CLI is the only module that prints or reads ``argv``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import time
+from pathlib import Path
+
+from .errors import TailorError
+
+__all__ = ["main"]
+
+log = logging.getLogger("tailor")
+
+
+def _pattern_summary(pattern) -> list[str]:
+    from .curves import curve_length
+
+    lines = [f"{pattern.source}: {pattern.name}"]
+    lines.append(f"  panels      {len(pattern.panels)}  ({', '.join(p.name for p in pattern.panels)})")
+    lines.append(f"  area        {pattern.area:.4f} m²")
+    seam_len = sum(pattern.side_length(s.a) for s in pattern.seams)
+    auto = sum(s.orientation.startswith("auto:same") for s in pattern.seams)
+    extra = f", {auto} oriented 'same' from the placement" if auto else ""
+    lines.append(f"  seams       {len(pattern.seams)}  ({seam_len * 100:.1f} cm sewn{extra})")
+    if pattern.attachments:
+        lines.append(f"  attachments {len(pattern.attachments)}")
+    outline = sum(curve_length(e.curve) for p in pattern.panels for e in p.edges)
+    lines.append(f"  outline     {outline * 100:.1f} cm")
+    f = pattern.fabric
+    lines.append(
+        f"  fabric      {f.name}: {f.density * 1e3:g} g/m², stretch {f.stretch_warp * 100:g}/{f.stretch_weft * 100:g} % "
+        f"(warp/weft), bending c={f.bending:g}, friction {f.friction:g}, thickness {f.thickness * 1e3:g} mm"
+    )
+    placed = sum(p.placement is not None for p in pattern.panels)
+    lines.append(f"  placement   {placed}/{len(pattern.panels)} panels placed")
+    return lines
+
+
+def _cmd_check(args) -> int:
+    from .io import read_pattern
+
+    for path in args.patterns:
+        pattern = read_pattern(path)
+        print("\n".join(_pattern_summary(pattern)))
+    return 0
+
+
+def _cmd_mesh(args) -> int:
+    from .io import read_pattern
+    from .io.obj import write_obj
+    from .mesh import discretise
+
+    pattern = read_pattern(args.pattern)
+    t0 = time.perf_counter()
+    mesh = discretise(pattern, args.resolution * 1e-2)
+    ms = (time.perf_counter() - t0) * 1e3
+    out = Path(args.out) if args.out else Path("out") / f"{pattern.name}.obj"
+    write_obj(
+        out,
+        mesh.flat_positions(),
+        mesh.faces,
+        uv=mesh.uv,
+        face_group=mesh.face_panel,
+        group_names=mesh.panel_names,
+        header=f"tailor mesh {pattern.source} at {args.resolution:g} cm",
+    )
+    area = mesh.face_rest_area.sum()
+    print(
+        f"{pattern.source}: {mesh.vertex_count} vertices, {mesh.face_count} triangles, "
+        f"{len(mesh.seam_pairs)} seam pairs, min angle {mesh.min_angle():.1f}°, "
+        f"area {area:.4f} m² ({(area / pattern.area - 1) * 100:+.3f} % of exact), {ms:.0f} ms -> {out}"
+    )
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``tailor`` command."""
+    p = argparse.ArgumentParser(prog="tailor", description="Sewing patterns in, simulated garments out.")
+    p.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    p.add_argument("-q", "--quiet", action="store_true", help="only errors")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    c = sub.add_parser("check", help="validate pattern files and summarise them")
+    c.add_argument("patterns", nargs="+", metavar="PATTERN")
+    c.set_defaults(func=_cmd_check)
+
+    m = sub.add_parser("mesh", help="triangulate a pattern's panels flat, as an OBJ")
+    m.add_argument("pattern", metavar="PATTERN")
+    m.add_argument("--resolution", type=float, default=1.5, metavar="CM", help="target edge length (cm, default 1.5)")
+    m.add_argument("--out", metavar="FILE.obj", help="output OBJ (default out/<pattern>.obj)")
+    m.set_defaults(func=_cmd_mesh)
+    return p
+
+
+def main(argv=None) -> int:
+    """Run the ``tailor`` command; returns the exit status (0 ok, 2 bad input or failure)."""
+    args = build_parser().parse_args(argv)
+    level = logging.ERROR if args.quiet else logging.DEBUG if args.verbose else logging.INFO
+    logging.basicConfig(level=level, format="%(message)s")
+    try:
+        return args.func(args)
+    except TailorError as exc:
+        print(f"tailor: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("tailor: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,61 @@
+"""Shared fixtures: small pattern documents built in code, and the GarmentCode reference folder."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PANELS = ROOT / "panels"
+GARMENTCODE = ROOT.parent / "shared" / "garmentcode"
+
+
+def rect_panel(w: float, h: float, **extra) -> dict:
+    """A w × h cm rectangle panel, counter-clockwise from the origin."""
+    panel = {
+        "vertices": [[0, 0], [w, 0], [w, h], [0, h]],
+        "edges": [{"endpoints": [i, (i + 1) % 4]} for i in range(4)],
+    }
+    panel.update(extra)
+    return panel
+
+
+def doc_with(panels: dict, stitches=None, **top) -> dict:
+    """A pattern document around ``panels``."""
+    doc = {"pattern": {"panels": copy.deepcopy(panels), "stitches": stitches or []}, "properties": {"units_in_meter": 100}}
+    doc.update(top)
+    return doc
+
+
+@pytest.fixture
+def square_doc():
+    """One 20 × 20 cm panel."""
+    return doc_with({"sq": rect_panel(20, 20)})
+
+
+@pytest.fixture
+def tube_doc():
+    """One 30 × 20 cm panel whose left and right edges are sewn into a tube."""
+    return doc_with({"tube": rect_panel(30, 20)}, [[{"panel": "tube", "edge": 1}, {"panel": "tube", "edge": 3}]])
+
+
+@pytest.fixture
+def two_panel_doc():
+    """Front and back 30 × 40 cm panels sewn at both sides."""
+    return doc_with(
+        {"front": rect_panel(30, 40), "back": rect_panel(30, 40)},
+        [
+            [{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}],
+            [{"panel": "front", "edge": 3}, {"panel": "back", "edge": 1}],
+        ],
+    )
+
+
+@pytest.fixture
+def garmentcode_dir():
+    """``../shared/garmentcode`` (reference patterns, not in the repository); skip when absent."""
+    if not GARMENTCODE.is_dir():
+        pytest.skip("GarmentCode reference patterns not available")
+    return GARMENTCODE

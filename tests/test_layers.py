@@ -1,0 +1,56 @@
+"""The import layers of DESIGN.md hold: physics never imports io or cli; each library has one owner."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[1] / "tailor"
+
+# module → layer; a module may import tailor modules of the same or a lower layer only
+LAYERS = {
+    "errors": 0, "units": 0, "landmarks": 0,
+    "geometry": 1, "curves": 1,
+    "pattern": 2, "fabric": 2, "body": 2,
+    "mesh": 3, "seams": 3, "placement": 3, "mannequin": 3,
+    "params": 4, "model": 4,
+    "forces": 5, "collide": 5,
+    "integrators": 6,
+    "sim": 7, "scenes": 7,
+    "io": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9,
+}
+OWNERS = {"triangle": {"mesh"}, "fcl": {"collide"}, "meshio": {"io"}}
+
+
+def _module_key(path: Path) -> str:
+    rel = path.relative_to(PKG).with_suffix("")
+    return rel.parts[0]
+
+
+def _imports(path: Path):
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:  # relative: resolve against the package
+                base = path.relative_to(PKG).parent.parts[: max(len(path.relative_to(PKG).parent.parts) - node.level + 1, 0)]
+                target = (*base, *(node.module.split(".") if node.module else []))
+                yield "tailor", target[0] if target else "__init__"
+            elif node.module:
+                yield node.module.split(".")[0], None
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name.split(".")[0], None
+
+
+SOURCES = sorted(PKG.rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(PKG)))
+def test_layering(path):
+    me = _module_key(path)
+    assert me in LAYERS, f"{me} has no layer in tests/test_layers.py"
+    for top, target in _imports(path):
+        if top == "tailor" and target is not None and target != me:
+            assert LAYERS[target] <= LAYERS[me], f"{me} (layer {LAYERS[me]}) imports {target} (layer {LAYERS[target]})"
+        if top in OWNERS:
+            assert me in OWNERS[top], f"{me} imports {top}, owned by {OWNERS[top]}"
