@@ -39,7 +39,8 @@ class Fabric:
         Elongation λ under own weight as a fraction (0.02 = 2 %), along the warp (grain)
         and the weft (Eq. 22a/b).
     bending : float
-        Carignan's bending number c [dimensionless] (Eq. 25); 0 means no bending resistance.
+        Carignan's bending number c (Eq. 25): the cube of the fabric's Peirce bending length in
+        cm (see :mod:`tailor.params`); 0 means no bending resistance. Silk ≈ 1, denim ≈ 60.
     friction : float
         Coulomb friction coefficient μ against bodies (Eq. 14).
     thickness : float
@@ -87,14 +88,14 @@ def _p(name, g_m2, stretch_pct, bending, friction=0.4, thickness_mm=1.0, weft_pc
 PRESETS: dict[str, Fabric] = {
     f.name: f
     for f in (
-        _p("chiffon", 35, 3.0, 0.0005, 0.3, 0.3),
-        _p("silk", 50, 2.0, 0.001, 0.25, 0.3),
-        _p("cotton", 120, 1.0, 0.01, 0.4, 0.5),
-        _p("jersey", 180, 8.0, 0.005, 0.5, 0.8, weft_pct=15.0),
-        _p("wool", 280, 1.5, 0.03, 0.5, 1.5),
-        _p("denim", 400, 0.5, 0.1, 0.5, 1.0),
-        _p("leather", 1000, 0.3, 0.5, 0.6, 1.2),
-        _p("heavy_leather", 10000, 0.2, 1.0, 0.6, 3.0),
+        _p("chiffon", 35, 3.0, 0.3, 0.3, 0.3),
+        _p("silk", 50, 2.0, 1.0, 0.25, 0.3),
+        _p("cotton", 120, 1.0, 8.0, 0.4, 0.5),
+        _p("jersey", 180, 8.0, 4.0, 0.5, 0.8, weft_pct=15.0),
+        _p("wool", 280, 1.5, 15.0, 0.5, 1.5),
+        _p("denim", 400, 0.5, 60.0, 0.5, 1.0),
+        _p("leather", 1000, 0.3, 300.0, 0.6, 1.2),
+        _p("heavy_leather", 10000, 0.2, 1000.0, 0.6, 3.0),
     )
 }
 """Named fabrics, light to heavy. ``heavy_leather`` is Carignan's 1.0 g/cm² extreme."""

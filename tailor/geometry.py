@@ -16,7 +16,15 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["face_areas", "face_signed_areas_2d", "face_angles", "unique_edges", "connected_components"]
+__all__ = [
+    "face_areas",
+    "face_signed_areas_2d",
+    "face_angles",
+    "unique_edges",
+    "connected_components",
+    "hinge_angles",
+    "hinge_angle_gradients",
+]
 
 
 def _cross(a, b):
@@ -68,3 +76,36 @@ def connected_components(vertex_count: int, faces) -> np.ndarray:
     e = unique_edges(faces)
     g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(vertex_count, vertex_count))
     return cc(g, directed=False)[1]
+
+
+def _rowdot(a, b):
+    return np.einsum("ij,ij->i", a, b)
+
+
+def hinge_angles(x, hinge_vertices) -> np.ndarray:
+    """Signed dihedral angle of each hinge [rad], 0 when flat, shape (B,)."""
+    e0, e1, o0, o1 = (x[hinge_vertices[:, k]] for k in range(4))
+    e = e1 - e0
+    n0 = np.cross(e, o0 - e0)
+    n1 = np.cross(o1 - e1, e)
+    el = np.linalg.norm(e, axis=1)
+    sin = _rowdot(np.cross(n0, n1), e) / el
+    cos = _rowdot(n0, n1)
+    return np.arctan2(sin, cos)
+
+
+def hinge_angle_gradients(x, hinge_vertices):
+    """∂θ/∂x of each hinge's four vertices [rad/m], shape (B, 4, 3), order ``[e0, e1, o0, o1]``."""
+    e0, e1, o0, o1 = (x[hinge_vertices[:, k]] for k in range(4))
+    e = e1 - e0
+    el = np.linalg.norm(e, axis=1)
+    n0 = np.cross(e, o0 - e0)
+    n1 = np.cross(o1 - e1, e)
+    q0 = n0 / _rowdot(n0, n0)[:, None]
+    q1 = n1 / _rowdot(n1, n1)[:, None]
+    eh = e / el[:, None]
+    g_o0 = -el[:, None] * q0
+    g_o1 = -el[:, None] * q1
+    g_e0 = -_rowdot(o0 - e1, eh)[:, None] * q0 - _rowdot(o1 - e1, eh)[:, None] * q1
+    g_e1 = _rowdot(o0 - e0, eh)[:, None] * q0 + _rowdot(o1 - e0, eh)[:, None] * q1
+    return np.stack([g_e0, g_e1, g_o0, g_o1], axis=1)

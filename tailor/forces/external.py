@@ -1,0 +1,55 @@
+"""External forces (Carignan Eq. 1 right-hand side; Walker Eq. 3): gravity and air.
+
+Air acts on each triangle along its normal, against the normal component of the velocity
+relative to the wind: f = −½·ρ_air·C_d·A·(v_rel·n)|v_rel·n|·n, shared equally by its corners.
+That is drag when the air is still and wind when it moves, and it is why a flag flaps: the
+force follows the cloth's orientation. A cloth in vacuum (ρ_air = 0) feels only gravity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["gravity_forces", "gravity_energy", "air_forces"]
+
+
+def gravity_forces(model, state, out=None) -> np.ndarray:
+    """m·g per vertex [N], shape (N, 3); added into ``out`` when given."""
+    out = np.zeros_like(state.x) if out is None else out
+    out += model.vertex_mass[:, None] * model.gravity[None, :]
+    return out
+
+
+def gravity_energy(model, state) -> float:
+    """Potential energy −Σ m·g·x [J] (zero at the origin)."""
+    return float(-np.dot(model.vertex_mass, state.x @ model.gravity))
+
+
+def air_forces(model, state, wind=None, out=None) -> np.ndarray:
+    """Normal air force on every face, spread to its corners [N], shape (N, 3).
+
+    Parameters
+    ----------
+    wind : callable or array_like, optional
+        Air velocity [m/s]: a (3,) vector, a (F, 3) array per face, or ``wind(points, t)``
+        returning (F, 3) at the face centres. ``None`` = still air.
+    """
+    out = np.zeros_like(state.x) if out is None else out
+    if model.air_density <= 0.0:
+        return out
+    f = model.faces
+    p0, p1, p2 = state.x[f[:, 0]], state.x[f[:, 1]], state.x[f[:, 2]]
+    cross = np.cross(p1 - p0, p2 - p0)
+    area2 = np.linalg.norm(cross, axis=1)
+    normal = cross / np.maximum(area2, 1e-300)[:, None]
+    v_face = (state.v[f[:, 0]] + state.v[f[:, 1]] + state.v[f[:, 2]]) / 3.0
+    if wind is not None:
+        air = wind((p0 + p1 + p2) / 3.0, state.t) if callable(wind) else np.asarray(wind, float)
+        v_face = v_face - air
+    vn = np.einsum("ij,ij->i", v_face, normal)
+    mag = -0.5 * model.air_density * model.drag_coefficient * (0.5 * area2) * vn * np.abs(vn) / 3.0
+    force = normal * mag[:, None]
+    n = len(out)
+    for k in range(3):
+        out[:, k] += np.bincount(f.reshape(-1), np.repeat(force[:, k], 3), minlength=n)
+    return out
