@@ -21,7 +21,10 @@ from .forces import total_forces
 from .forces.membrane import deformation_gradient
 from .integrators import make_integrator
 
-__all__ = ["Guard", "check_state", "simulate", "run"]
+__all__ = ["Guard", "check_state", "simulate", "run", "IMPLICIT_STEP"]
+
+IMPLICIT_STEP = 0.01
+"""Default step of the implicit integrator [s]: stable far beyond Eq. 24, four steps per 25 fps frame."""
 
 log = logging.getLogger(__name__)
 
@@ -88,7 +91,7 @@ def simulate(model, state, *, duration: float, frame_rate: float = 25.0, integra
 
     Frame 0 is the initial state. Steps per frame are chosen so frames fall exactly on
     multiples of 1/frame_rate with a step no larger than ``dt`` (default: the model's Eq. 24
-    step for explicit integrators, 4× that for ``implicit``).
+    step for explicit integrators, :data:`IMPLICIT_STEP` for ``implicit``).
 
     Parameters
     ----------
@@ -102,7 +105,7 @@ def simulate(model, state, *, duration: float, frame_rate: float = 25.0, integra
     integ = make_integrator(integrator) if isinstance(integrator, str) else integrator
     name = getattr(integ, "name", "?")
     if dt is None:
-        dt = model.time_step * (4.0 if not getattr(integ, "explicit", True) else 1.0)
+        dt = model.time_step if getattr(integ, "explicit", True) else min(IMPLICIT_STEP, 1.0 / frame_rate)
     if not (dt > 0 and math.isfinite(dt)):
         raise ValueError(f"time step must be positive, got {dt!r}")
     frame_dt = 1.0 / frame_rate

@@ -59,3 +59,24 @@ def garmentcode_dir():
     if not GARMENTCODE.is_dir():
         pytest.skip("GarmentCode reference patterns not available")
     return GARMENTCODE
+
+
+def sheet(width_cm: float, height_cm: float, resolution_m: float, fabric="cotton", *, vertical=True, grain=90, **model_kwargs):
+    """A rectangular cloth: (model, rest positions). Vertical sheets span x (width) and z (height)."""
+    import numpy as np
+
+    from tailor.fabric import Fabric, preset
+    from tailor.io import pattern_from_dict
+    from tailor.mesh import discretise
+    from tailor.model import build_model
+
+    doc = doc_with({"sheet": rect_panel(width_cm, height_cm, grain=grain)})
+    mesh = discretise(pattern_from_dict(doc), resolution_m)
+    fab = fabric if isinstance(fabric, Fabric) else preset(fabric)
+    model = build_model(mesh, fab, **model_kwargs)
+    uv = model.rest_uv
+    if vertical:
+        x0 = np.column_stack([uv[:, 0], np.zeros(len(uv)), uv[:, 1]])
+    else:
+        x0 = np.column_stack([uv, np.zeros(len(uv))])
+    return model, x0

@@ -18,9 +18,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import hinge_angle_gradients
+from .kernels import bending_jacobian_into, membrane_jacobian_into
 from .membrane import membrane_gradients
 
-__all__ = ["SparsePattern", "force_jacobians"]
+__all__ = ["SparsePattern", "force_jacobians", "jacobian_data", "jacobian_blocks"]
 
 
 def _block_indices(elements):
@@ -41,11 +42,12 @@ class SparsePattern:
             groups = [model.spring_vertices]
         if model.has_bending:
             groups.append(model.hinge_vertices)
-        rows, cols = [], []
+        rows, cols, sizes = [], [], []
         for g in groups:
             r, c = _block_indices(np.asarray(g))
             rows.append(r.reshape(-1))
             cols.append(c.reshape(-1))
+            sizes.append(r.shape)
         diag = np.arange(n)
         rows.append(diag)
         cols.append(diag)
@@ -59,11 +61,21 @@ class SparsePattern:
         self.diagonal_offset = len(key) - n  # the identity entries come last
         order_csr = np.lexsort((self.cols, self.rows))
         assert np.all(order_csr == np.arange(self.nnz))  # np.unique already sorts by (row, col)
+        starts = np.cumsum([0] + [int(np.prod(s)) for s in sizes])
+        self.positions = [
+            self.scatter[a:b].reshape(s[0], -1).astype(np.int64) for a, b, s in zip(starts[:-1], starts[1:], sizes)
+        ]
+        """Per element group (faces or springs, then hinges): CSR slot of each block entry, (E, (3k)²)."""
+        self.diagonal_slots = self.scatter[self.diagonal_offset :]
+        """CSR slot of each diagonal entry (dof order)."""
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.rows, minlength=n))]).astype(np.int32)
 
     def matrix(self, entries) -> sp.csr_matrix:
         """CSR matrix from the concatenated element entries (in pattern order, identity slot last)."""
-        data = np.bincount(self.scatter, weights=entries, minlength=self.nnz)
+        return self.csr(np.bincount(self.scatter, weights=entries, minlength=self.nnz))
+
+    def csr(self, data) -> sp.csr_matrix:
+        """CSR matrix with this pattern and the given stored values."""
         return sp.csr_matrix((data, self.cols, self.indptr), shape=self.shape)
 
 
@@ -96,8 +108,32 @@ def _spring_blocks(model, x, stiffness_part: bool):
     return np.einsum("ab,fij->faibj", sign, b3).reshape(-1, 6, 6)
 
 
+def jacobian_data(model, state, pattern: SparsePattern):
+    """Stored values (in ``pattern``'s CSR order) of K = −∂f/∂x and C = −∂f/∂v."""
+    if model.elastic == "springs":
+        k, c = jacobian_blocks(model, state, pattern)
+        return k.data, c.data
+    kdata = np.zeros(pattern.nnz)
+    cdata = np.zeros(pattern.nnz)
+    membrane_jacobian_into(model, state.x, pattern.positions[0], kdata, cdata)
+    if model.has_bending:
+        bending_jacobian_into(model, state.x, pattern.positions[1], kdata)
+    return kdata, cdata
+
+
 def force_jacobians(model, state, pattern: SparsePattern):
-    """(K, C): stiffness −∂f/∂x and damping −∂f/∂v as CSR matrices, shape (3N, 3N)."""
+    """(K, C): stiffness −∂f/∂x and damping −∂f/∂v as CSR matrices, shape (3N, 3N).
+
+    The membrane and bending blocks are scattered straight into CSR storage by compiled kernels
+    (:mod:`.kernels`); springs use the numpy blocks of this module. :func:`jacobian_blocks` gives
+    the same matrices from numpy alone (the reference the kernels are tested against).
+    """
+    kdata, cdata = jacobian_data(model, state, pattern)
+    return pattern.csr(kdata), pattern.csr(cdata)
+
+
+def jacobian_blocks(model, state, pattern: SparsePattern):
+    """(K, C) assembled from numpy element blocks (reference implementation)."""
     x = state.x
     n = 3 * model.vertex_count
     if model.elastic == "springs":

@@ -13,7 +13,13 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["membrane_forces_into", "bending_forces_into"]
+__all__ = [
+    "membrane_forces_into",
+    "bending_forces_into",
+    "membrane_jacobian_into",
+    "bending_jacobian_into",
+    "jacobi_pcg",
+]
 
 
 @njit(cache=True)
@@ -104,3 +110,160 @@ def membrane_forces_into(model, state, out, *, damping: bool = True) -> None:
 def bending_forces_into(model, state, out) -> None:
     """Add dihedral bending forces of every hinge into ``out`` [N]."""
     _bending(state.x, model.hinge_vertices, model.hinge_stiffness, model.hinge_rest_angle, out)
+
+
+@njit(cache=True)
+def _membrane_jacobian(x, faces, dm, area, k1, k2, k12, p1, p2, p12, pos, kdata, cdata):
+    """Scatter each face's 9×9 stiffness (Gauss–Newton + clamped geometric) and damping blocks."""
+    g = np.empty((3, 9))
+    for f in range(faces.shape[0]):
+        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+        a00, a01, a10, a11 = dm[f, 0, 0], dm[f, 0, 1], dm[f, 1, 0], dm[f, 1, 1]
+        w1 = (-(a00 + a10), a00, a10)
+        w2 = (-(a01 + a11), a01, a11)
+        c1 = np.empty(3)
+        c2 = np.empty(3)
+        for k in range(3):
+            d1 = x[i1, k] - x[i0, k]
+            d2 = x[i2, k] - x[i0, k]
+            c1[k] = d1 * a00 + d2 * a10
+            c2[k] = d1 * a01 + d2 * a11
+        for a in range(3):
+            for k in range(3):
+                g[0, 3 * a + k] = w1[a] * c1[k]
+                g[1, 3 * a + k] = w2[a] * c2[k]
+                g[2, 3 * a + k] = 0.5 * (w1[a] * c2[k] + w2[a] * c1[k])
+        s11 = k1[f] * 0.5 * (c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2] - 1.0)
+        s22 = k2[f] * 0.5 * (c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2] - 1.0)
+        s12 = k12[f] * 0.5 * (c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2])
+        # positive part of the 2×2 stress (closed-form eigen-decomposition)
+        half_tr = 0.5 * (s11 + s22)
+        rad = math.sqrt(0.25 * (s11 - s22) ** 2 + s12 * s12)
+        l1, l2 = half_tr + rad, half_tr - rad
+        if rad > 0.0:
+            if abs(s12) > 1e-300:
+                v1x, v1y = l1 - s22, s12
+            elif s11 >= s22:
+                v1x, v1y = 1.0, 0.0
+            else:
+                v1x, v1y = 0.0, 1.0
+            nrm = math.sqrt(v1x * v1x + v1y * v1y)
+            v1x, v1y = v1x / nrm, v1y / nrm
+        else:
+            v1x, v1y = 1.0, 0.0
+        v2x, v2y = -v1y, v1x
+        l1p, l2p = max(l1, 0.0), max(l2, 0.0)
+        q11 = l1p * v1x * v1x + l2p * v2x * v2x
+        q22 = l1p * v1y * v1y + l2p * v2y * v2y
+        q12 = l1p * v1x * v1y + l2p * v2x * v2y
+        ar = area[f]
+        ck = (k1[f] * ar, k2[f] * ar, 2.0 * k12[f] * ar)
+        cc = (p1[f] * ar, p2[f] * ar, 2.0 * p12[f] * ar)
+        for r in range(9):
+            for c in range(9):
+                kv = ck[0] * g[0, r] * g[0, c] + ck[1] * g[1, r] * g[1, c] + ck[2] * g[2, r] * g[2, c]
+                cv = cc[0] * g[0, r] * g[0, c] + cc[1] * g[1, r] * g[1, c] + cc[2] * g[2, r] * g[2, c]
+                if r % 3 == c % 3:
+                    ra, cb = r // 3, c // 3
+                    kv += ar * (w1[ra] * (q11 * w1[cb] + q12 * w2[cb]) + w2[ra] * (q12 * w1[cb] + q22 * w2[cb]))
+                p = pos[f, 9 * r + c]
+                kdata[p] += kv
+                cdata[p] += cv
+
+
+@njit(cache=True)
+def _bending_jacobian(x, hinges, stiffness, pos, kdata):
+    """Scatter each hinge's 12×12 Gauss–Newton block k·∇θ∇θᵀ."""
+    g = np.empty(12)
+    for h in range(hinges.shape[0]):
+        j0, j1, j2, j3 = hinges[h, 0], hinges[h, 1], hinges[h, 2], hinges[h, 3]
+        ex, ey, ez = x[j1, 0] - x[j0, 0], x[j1, 1] - x[j0, 1], x[j1, 2] - x[j0, 2]
+        ax, ay, az = x[j2, 0] - x[j0, 0], x[j2, 1] - x[j0, 1], x[j2, 2] - x[j0, 2]
+        bx, by, bz = x[j3, 0] - x[j1, 0], x[j3, 1] - x[j1, 1], x[j3, 2] - x[j1, 2]
+        n0 = (ey * az - ez * ay, ez * ax - ex * az, ex * ay - ey * ax)
+        n1 = (by * ez - bz * ey, bz * ex - bx * ez, bx * ey - by * ex)
+        el = math.sqrt(ex * ex + ey * ey + ez * ez)
+        nn0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]
+        nn1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]
+        if el == 0.0 or nn0 == 0.0 or nn1 == 0.0:
+            continue
+        ux, uy, uz = ex / el, ey / el, ez / el
+        a0 = ax * ux + ay * uy + az * uz
+        a1 = a0 - el
+        b1 = bx * ux + by * uy + bz * uz
+        b0 = b1 + el
+        for k in range(3):
+            q0 = n0[k] / nn0
+            q1 = n1[k] / nn1
+            g[k] = -a1 * q0 - b1 * q1
+            g[3 + k] = a0 * q0 + b0 * q1
+            g[6 + k] = -el * q0
+            g[9 + k] = -el * q1
+        kh = stiffness[h]
+        for r in range(12):
+            for c in range(12):
+                kdata[pos[h, 12 * r + c]] += kh * g[r] * g[c]
+
+
+def membrane_jacobian_into(model, x, positions, kdata, cdata) -> None:
+    """Add the membrane stiffness and damping Jacobian entries into CSR data arrays."""
+    _membrane_jacobian(
+        x, model.faces, model.face_dm_inv, model.face_rest_area,
+        model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear,
+        model.face_damping_warp, model.face_damping_weft, model.face_damping_shear, positions, kdata, cdata,
+    )
+
+
+def bending_jacobian_into(model, x, positions, kdata) -> None:
+    """Add the bending stiffness Jacobian entries into a CSR data array."""
+    _bending_jacobian(x, model.hinge_vertices, model.hinge_stiffness, positions, kdata)
+
+
+@njit(cache=True)
+def _csr_matvec(indptr, indices, data, x, out):
+    for i in range(len(indptr) - 1):
+        acc = 0.0
+        for p in range(indptr[i], indptr[i + 1]):
+            acc += data[p] * x[indices[p]]
+        out[i] = acc
+
+
+@njit(cache=True)
+def jacobi_pcg(indptr, indices, data, b, x, inv_diag, rtol, max_iterations):
+    """Solve A·x = b for SPD CSR ``A`` by Jacobi-preconditioned conjugate gradients, in place.
+
+    Returns (iterations, converged). Stops when |r| ≤ rtol·|b|.
+    """
+    n = len(b)
+    r = np.empty(n)
+    q = np.empty(n)
+    _csr_matvec(indptr, indices, data, x, q)
+    for i in range(n):
+        r[i] = b[i] - q[i]
+    bnorm = math.sqrt(np.dot(b, b))
+    if bnorm == 0.0:
+        for i in range(n):
+            x[i] = 0.0
+        return 0, True
+    target = rtol * bnorm
+    z = r * inv_diag
+    p = z.copy()
+    rz = np.dot(r, z)
+    for it in range(max_iterations):
+        if math.sqrt(np.dot(r, r)) <= target:
+            return it, True
+        _csr_matvec(indptr, indices, data, p, q)
+        pq = np.dot(p, q)
+        if pq <= 0.0:
+            return it, False
+        alpha = rz / pq
+        for i in range(n):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+            z[i] = r[i] * inv_diag[i]
+        rz_new = np.dot(r, z)
+        beta = rz_new / rz
+        rz = rz_new
+        for i in range(n):
+            p[i] = z[i] + beta * p[i]
+    return max_iterations, math.sqrt(np.dot(r, r)) <= target

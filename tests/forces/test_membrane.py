@@ -1,0 +1,104 @@
+"""Carignan's elastic surface on triangles: energy/force consistency, invariances, constitutive law."""
+
+import numpy as np
+import pytest
+
+from conftest import sheet
+from tailor.fabric import preset
+from tailor.forces import damping_forces, dissipation, stretch_energy, stretch_forces
+from tailor.forces.membrane import green_strain
+
+RNG = np.random.default_rng(7)
+
+
+def random_rotation(rng):
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    return q * np.sign(np.diag(r)) * (1 if np.linalg.det(q * np.sign(np.diag(r))) > 0 else -1)
+
+
+@pytest.fixture(scope="module")
+def patch():
+    model, x0 = sheet(20, 20, 0.04, "jersey", vertical=False)  # anisotropic: warp 8 %, weft 15 %
+    return model, x0
+
+
+def test_rest_state_has_no_force(patch):
+    model, x0 = patch
+    f = stretch_forces(model, model.state(x0))
+    assert np.abs(f).max() < 1e-12 * model.face_stretch_warp.max()
+
+
+def test_rigid_motion_no_force_no_dissipation(patch):
+    model, x0 = patch
+    rot = random_rotation(RNG)
+    x = x0 @ rot.T + [0.3, -1.0, 2.0]
+    omega, u = RNG.normal(size=3), RNG.normal(size=3)
+    v = np.cross(omega, x) + u  # any rigid velocity field
+    state = model.state(x, v)
+    scale = model.face_stretch_warp.max()
+    assert np.abs(stretch_forces(model, state)).max() < 1e-10 * scale
+    assert np.abs(damping_forces(model, state)).max() < 1e-10 * model.face_damping_warp.max()
+    assert dissipation(model, state) < 1e-20
+
+
+def test_force_is_minus_energy_gradient(patch):
+    model, x0 = patch
+    x = x0 + RNG.normal(0, 0.004, x0.shape)
+    state = model.state(x)
+    f = stretch_forces(model, state)
+    eps = 1e-7
+    for i in RNG.choice(model.vertex_count, 6, replace=False):
+        for k in range(3):
+            up, dn = state.copy(), state.copy()
+            up.x[i, k] += eps
+            dn.x[i, k] -= eps
+            numeric = -(stretch_energy(model, up) - stretch_energy(model, dn)) / (2 * eps)
+            assert f[i, k] == pytest.approx(numeric, rel=1e-5, abs=1e-9 * np.abs(f).max())
+
+
+def test_damping_is_minus_dissipation_gradient_in_velocity(patch):
+    model, x0 = patch
+    state = model.state(x0 + RNG.normal(0, 0.004, x0.shape), RNG.normal(0, 0.3, x0.shape))
+    f = damping_forces(model, state)
+    eps = 1e-6
+    for i in RNG.choice(model.vertex_count, 6, replace=False):
+        for k in range(3):
+            up, dn = state.copy(), state.copy()
+            up.v[i, k] += eps
+            dn.v[i, k] -= eps
+            numeric = -(dissipation(model, up) - dissipation(model, dn)) / (2 * eps)
+            assert f[i, k] == pytest.approx(numeric, rel=1e-5, abs=1e-9 * np.abs(f).max())
+
+
+@pytest.mark.parametrize("forces", [stretch_forces, damping_forces])
+def test_internal_forces_conserve_momentum(patch, forces):
+    model, x0 = patch
+    state = model.state(x0 + RNG.normal(0, 0.01, x0.shape), RNG.normal(0, 1.0, x0.shape))
+    f = forces(model, state)
+    scale = np.abs(f).sum()
+    assert np.abs(f.sum(axis=0)).max() < 1e-12 * scale  # linear
+    assert np.abs(np.cross(state.x, f).sum(axis=0)).max() < 1e-12 * scale  # angular
+
+
+def test_uniaxial_tension_follows_the_green_strain_law():
+    fabric = preset("cotton")
+    model, x0 = sheet(10, 10, 0.02, fabric, vertical=False, grain=0)  # warp along x
+    s = 1.05
+    x = x0 * [s, 1.0, 1.0]
+    e11, e22, e12 = green_strain(model, x)
+    assert np.allclose(e11, 0.5 * (s * s - 1)) and np.allclose(e22, 0) and np.allclose(e12, 0, atol=1e-12)
+    f = stretch_forces(model, model.state(x))
+    right = model.rest_uv[:, 0] > 0.1 - 1e-9
+    # first Piola traction: s·η·E11 per unit rest width, over a 10 cm edge
+    expected = s * model.face_stretch_warp[0] * 0.5 * (s * s - 1) * 0.10
+    assert f[right, 0].sum() == pytest.approx(-expected, rel=1e-9)
+    assert f[right, 1].sum() == pytest.approx(0, abs=1e-9 * expected)
+
+
+def test_warp_and_weft_have_their_own_stiffness():
+    jersey = preset("jersey")  # stretch 8 % warp, 15 % weft
+    model, x0 = sheet(10, 10, 0.02, jersey, vertical=False, grain=90)  # warp along y
+    pull_y = stretch_energy(model, model.state(x0 * [1.0, 1.02, 1.0]))
+    pull_x = stretch_energy(model, model.state(x0 * [1.02, 1.0, 1.0]))
+    assert pull_y / pull_x == pytest.approx(model.face_stretch_warp[0] / model.face_stretch_weft[0], rel=1e-9)
+    assert model.face_stretch_warp[0] > model.face_stretch_weft[0]

@@ -1,0 +1,125 @@
+"""Integrators: free fall, momentum, Walker's instability observation, and the stability guard."""
+
+import numpy as np
+import pytest
+
+from conftest import sheet
+from tailor.errors import SimulationUnstable
+from tailor.fabric import PRESETS
+from tailor.forces import internal_forces
+from tailor.integrators import INTEGRATORS, make_integrator
+from tailor.sim import run, simulate
+from tailor.units import GRAVITY
+
+FIRST_ORDER = {"forward", "symplectic", "implicit", "verlet"}  # Verlet: its symplectic-Euler first step lags it
+
+
+@pytest.fixture(scope="module")
+def falling_sheet():
+    # a horizontal 1 m sheet at a realistic 150 g/m², in vacuum
+    from tailor.fabric import preset
+
+    return sheet(100, 100, 0.05, preset("cotton").with_values(density=0.150), vertical=False)
+
+
+@pytest.mark.parametrize("name", list(INTEGRATORS))
+def test_free_fall_is_flat_and_straight(falling_sheet, name):
+    model, x0 = falling_sheet
+    x0 = x0 + [0.0, 0.0, 2.0]
+    dt = model.time_step if name != "implicit" else 0.01
+    t = 0.4
+    state = run(model, model.state(x0), duration=t, frame_rate=25, integrator=name, dt=dt)
+    drop = x0[:, 2] - state.x[:, 2]
+    exact = 0.5 * GRAVITY * t * t
+    steps = round(t / dt)
+    h = t / steps
+    # RK4 is exact for constant acceleration; the Euler variants are off by ½·g·t·Δt
+    tolerance = 0.5 * GRAVITY * t * h * (1 + 1e-6) if name in FIRST_ORDER else 1e-9
+    assert np.abs(drop - exact).max() <= tolerance
+    assert np.ptp(drop) < 1e-9  # every point falls the same: the sheet stays flat
+    assert np.abs(state.x[:, :2] - x0[:, :2]).max() < 1e-10  # no lateral drift (round-off only)
+    assert np.abs(internal_forces(model, state)).max() < 1e-9  # no internal deformation
+
+
+def test_internal_forces_conserve_momentum_and_rigid_motion_loses_no_energy():
+    from tailor.forces import dissipation
+
+    model, x0 = sheet(40, 30, 0.04, "jersey", vertical=False, gravity=(0, 0, 0))
+    rng = np.random.default_rng(0)
+    x = x0 * [1.03, 0.98, 1.0] + rng.normal(0, 0.002, x0.shape)  # stretched, crumpled
+    v = rng.normal(0, 0.5, x0.shape)
+    state = model.state(x, v)
+    f = internal_forces(model, state)
+    scale = np.abs(f).sum()
+    assert np.abs(f.sum(axis=0)).max() <= 1e-9 * scale
+    assert np.abs(np.cross(x, f).sum(axis=0)).max() <= 1e-9 * scale
+    # a spinning, translating sheet: no strain rate, so no internal damping
+    spin = model.state(x0, np.cross([0.3, -1.2, 2.0], x0) + [0.5, 0.0, -1.0])
+    assert dissipation(model, spin) == pytest.approx(0.0, abs=1e-18)
+    # symplectic Euler conserves momentum exactly under internal forces (Σf = 0, Σx×f = 0)
+    m = model.vertex_mass[:, None]
+    p0, l0 = (m * v).sum(axis=0), np.cross(x, m * v).sum(axis=0)
+    end = run(model, state, duration=0.02, frame_rate=100, integrator="symplectic")
+    p1, l1 = (m * end.v).sum(axis=0), np.cross(end.x, m * end.v).sum(axis=0)
+    assert np.abs(p1 - p0).max() <= 1e-9 * np.abs(m * v).sum()
+    assert np.abs(l1 - l0).max() <= 1e-9 * np.abs(np.cross(x, m * v)).sum()
+
+
+def test_single_mass_is_critically_damped():
+    # Eq. 26 makes "the ideal case of a single mass" return to rest without oscillating:
+    # one free corner of an equilateral triangle, stretched 10 % and released.
+    from tailor.fabric import preset
+    from tailor.io import pattern_from_dict
+    from tailor.mesh import discretise
+    from tailor.model import build_model
+
+    doc = {"pattern": {"panels": {"t": {"vertices": [[0, 0], [4, 0], [2, 3.4641016]],
+                                        "edges": [{"endpoints": [0, 1]}, {"endpoints": [1, 2]}, {"endpoints": [2, 0]}]}}}}
+    model = build_model(discretise(pattern_from_dict(doc), 0.1), preset("cotton"), gravity=(0, 0, 0)).with_pins([0, 1])
+    assert model.vertex_count == 3
+    x0 = np.column_stack([model.rest_uv, np.zeros(3)])
+    x = x0.copy()
+    x[2, 1] *= 1.10
+    ys = [s.x[2, 1] for _, s in simulate(model, model.state(x), duration=0.03, frame_rate=20000, integrator="rk4", dt=1e-6)]
+    initial = x[2, 1] - x0[2, 1]
+    assert (x0[2, 1] - min(ys)) <= 0.01 * initial  # overshoot below 1 % of the initial stretch
+    assert abs(ys[-1] - x0[2, 1]) < 1e-3 * initial  # and back at rest
+
+
+def hanging(fabric="cotton", resolution=0.05, size=50):
+    model, x0 = sheet(size, size, resolution, fabric)
+    top = np.flatnonzero(x0[:, 2] > size / 100 - 1e-9)
+    return model.with_pins(top), x0
+
+
+def test_forward_euler_blows_up_and_the_guard_stops_it():
+    model, x0 = hanging("cotton", 0.05)
+    frames = []
+    with pytest.raises(SimulationUnstable, match=r"t = .* s \(frame \d+, step \d+, Δt = .* s\).*try a smaller time step"):
+        for _, state in simulate(model, model.state(x0), duration=2.0, integrator="forward", dt=3.0 * model.time_step):
+            frames.append(state)
+    assert frames and all(np.isfinite(s.x).all() for s in frames)  # nothing non-finite was ever handed out
+
+
+@pytest.mark.parametrize("name", ["symplectic", "verlet", "rk4", "implicit"])
+@pytest.mark.parametrize("fabric", ["chiffon", "cotton", "heavy_leather"])
+def test_stable_at_eq24_step_quick(name, fabric):
+    model, x0 = hanging(fabric, 0.05, size=30)
+    dt = None if name == "implicit" else model.time_step
+    state = run(model, model.state(x0), duration=0.5, integrator=name, dt=dt)
+    assert np.isfinite(state.x).all() and np.abs(state.v).max() < 5.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["symplectic", "verlet", "rk4", "implicit"])
+@pytest.mark.parametrize("fabric", list(PRESETS))
+def test_stable_at_eq24_step_every_preset_5s(name, fabric):
+    model, x0 = hanging(fabric, 0.05, size=30)
+    dt = None if name == "implicit" else model.time_step
+    state = run(model, model.state(x0), duration=5.0, integrator=name, dt=dt)
+    assert np.isfinite(state.x).all() and np.abs(state.v).max() < 1.0
+
+
+def test_unknown_integrator():
+    with pytest.raises(ValueError, match="unknown integrator 'euler'; choose one of forward, symplectic"):
+        make_integrator("euler")
