@@ -80,6 +80,65 @@ def _cmd_mesh(args) -> int:
     return 0
 
 
+def _fabric_from_args(args):
+    from .errors import FabricError
+    from .fabric import preset
+
+    fabric = preset(args.fabric)
+    values = {}
+    if args.density is not None:
+        values["density"] = args.density * 1e-3
+    if args.stretch is not None:
+        values["stretch_warp"] = values["stretch_weft"] = args.stretch * 1e-2
+    if args.stretch_weft is not None:
+        values["stretch_weft"] = args.stretch_weft * 1e-2
+    if args.bending is not None:
+        values["bending"] = args.bending
+    if not values:
+        return fabric
+    try:
+        return fabric.with_values(name=f"{fabric.name} (custom)", **values)
+    except FabricError:
+        raise
+    except TypeError as exc:  # pragma: no cover - argparse guarantees the types
+        raise FabricError(str(exc)) from None
+
+
+def _cmd_params(args) -> int:
+    import json
+
+    from .params import fabric_params
+
+    if args.resolution <= 0:
+        from .errors import FabricError
+
+        raise FabricError(f"--resolution must be positive, got {args.resolution:g} cm")
+    fabric = _fabric_from_args(args)
+    p = fabric_params(fabric, args.resolution * 1e-2)
+    if args.json:
+        print(json.dumps({"fabric": fabric.name, **p.as_dict()}, indent=2))
+        return 0
+    rows = [
+        ("fabric", fabric.name, ""),
+        ("density ρ (Eq. 21)", f"{p.density * 1e3:g}", "g/m²"),
+        ("stretch λ warp / weft", f"{fabric.stretch_warp * 100:g} / {fabric.stretch_weft * 100:g}", "%"),
+        ("η₁₁ warp (Eq. 22a)", f"{p.stretch_warp:.4g}", "N/m"),
+        ("η₂₂ weft (Eq. 22b)", f"{p.stretch_weft:.4g}", "N/m"),
+        ("η₁₂ shear (Eq. 22c)", f"{p.stretch_shear:.4g}", "N/m"),
+        ("wave speed warp / weft (Eq. 23)", f"{p.wave_speed_warp:.4g} / {p.wave_speed_weft:.4g}", "m/s"),
+        ("bending c / B (Eq. 25)", f"{fabric.bending:g} / {p.bending_rigidity:.4g}", "cm³ / N·m"),
+        ("bending length (B/ρg)^⅓", f"{(p.bending_rigidity / (p.density * 9.80665)) ** (1 / 3) * 100:.3g}", "cm"),
+        ("damping φ₁₁ at h (Eq. 26)", f"{p.damping_warp:.4g}", "N·s/m"),
+        ("resolution h", f"{p.resolution * 100:g}", "cm"),
+        ("time step Δt (Eq. 24, l = 2)", f"{p.time_step:.4g}", "s"),
+        ("steps per second", f"{1 / p.time_step:.0f}", ""),
+    ]
+    width = max(len(r[0]) for r in rows)
+    for name, value, unit in rows:
+        print(f"{name:<{width}}  {value} {unit}".rstrip())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``tailor`` command."""
     p = argparse.ArgumentParser(prog="tailor", description="Sewing patterns in, simulated garments out.")
@@ -96,6 +155,18 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--resolution", type=float, default=1.5, metavar="CM", help="target edge length (cm, default 1.5)")
     m.add_argument("--out", metavar="FILE.obj", help="output OBJ (default out/<pattern>.obj)")
     m.set_defaults(func=_cmd_mesh)
+
+    from .fabric import DEFAULT_FABRIC, fabric_names
+
+    q = sub.add_parser("params", help="the simulation parameters derived from a fabric (Carignan Eq. 21-26)")
+    q.add_argument("--fabric", default=DEFAULT_FABRIC, choices=fabric_names(), help=f"preset (default {DEFAULT_FABRIC})")
+    q.add_argument("--density", type=float, metavar="G_M2", help="areal density, g/m²")
+    q.add_argument("--stretch", type=float, metavar="PCT", help="stretch under own weight (warp and weft), %%")
+    q.add_argument("--stretch-weft", type=float, metavar="PCT", help="a different stretch across the grain, %%")
+    q.add_argument("--bending", type=float, metavar="C", help="bending number c (cube of the bending length in cm)")
+    q.add_argument("--resolution", type=float, default=1.5, metavar="CM", help="element size (cm, default 1.5)")
+    q.add_argument("--json", action="store_true", help="machine-readable output")
+    q.set_defaults(func=_cmd_params)
     return p
 
 

@@ -20,8 +20,9 @@ import math
 from dataclasses import dataclass, fields, replace
 
 from .errors import FabricError
+from .hanging import hanging_strain
 
-__all__ = ["Fabric", "PRESETS", "preset", "fabric_names", "DEFAULT_FABRIC"]
+__all__ = ["Fabric", "KawabataCurves", "PRESETS", "KAWABATA_FABRICS", "preset", "fabric_names", "DEFAULT_FABRIC"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,6 +46,9 @@ class Fabric:
         Coulomb friction coefficient μ against bodies (Eq. 14).
     thickness : float
         Cloth thickness [m], used as the collision margin.
+    kawabata : KawabataCurves or None
+        Measured tensile, shear and bending curves (Bottino et al.); when given they replace the
+        stretch and bending numbers in the elastic law (the numbers remain for the time step).
     """
 
     name: str
@@ -54,10 +58,11 @@ class Fabric:
     bending: float
     friction: float = 0.4
     thickness: float = 1.0e-3
+    kawabata: "KawabataCurves | None" = None
 
     def __post_init__(self):
         for f in fields(self):
-            if f.name == "name":
+            if f.name in ("name", "kawabata"):
                 continue
             value = getattr(self, f.name)
             if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
@@ -80,6 +85,66 @@ class Fabric:
         return replace(self, **values)
 
 
+@dataclass(frozen=True, slots=True)
+class KawabataCurves:
+    """Piecewise-linear Kawabata (KES-F) curves through the origin (Bottino et al. §4.1, §5).
+
+    Each curve is a tuple of (deformation, load) breakpoints with increasing deformation and
+    non-decreasing load, starting after the origin; beyond the last point the last slope goes on,
+    and compression mirrors tension. One segment is the linear approximation (the KES mean slope),
+    five segments the accurate one. The simulator uses Bottino's secant stiffness K = f(ε)/ε, so
+    the stress of every triangle lies exactly on the curve.
+
+    Attributes
+    ----------
+    tensile_warp, tensile_weft : tuple of (strain, N/m)
+        Force per unit width against strain.
+    shear : tuple of (rad, N/m)
+        Shear force per unit length against shear angle (mean of warp and weft).
+    bending : tuple of (1/m, N·m/m)
+        Bending moment per unit width against curvature.
+    """
+
+    tensile_warp: tuple
+    tensile_weft: tuple
+    shear: tuple
+    bending: tuple
+
+    def __post_init__(self):
+        for name in ("tensile_warp", "tensile_weft", "shear", "bending"):
+            pts = getattr(self, name)
+            ok = isinstance(pts, tuple) and len(pts) >= 1 and all(
+                isinstance(p, tuple) and len(p) == 2 and all(isinstance(v, (int, float)) and math.isfinite(v) for v in p) for p in pts
+            )
+            if not ok:
+                raise FabricError(f"kawabata.{name}: expected a list of [deformation, load] pairs")
+            xs = [0.0] + [p[0] for p in pts]
+            ys = [0.0] + [p[1] for p in pts]
+            if any(b <= a for a, b in zip(xs, xs[1:])):
+                raise FabricError(f"kawabata.{name}: deformations must increase from 0")
+            if any(b < a for a, b in zip(ys, ys[1:])) or ys[-1] <= 0:
+                raise FabricError(f"kawabata.{name}: loads must not decrease and must end above 0")
+
+    @property
+    def segments(self) -> int:
+        """Segments of the tensile warp curve (1 = linear, 5 = Bottino's accurate variant)."""
+        return len(self.tensile_warp)
+
+    @staticmethod
+    def initial_slope(curve) -> float:
+        """Slope of the first segment (load per unit deformation)."""
+        return curve[0][1] / curve[0][0]
+
+    @staticmethod
+    def mean_slope(curve) -> float:
+        """Secant slope to the last point (the one-segment approximation of a curve)."""
+        return curve[-1][1] / curve[-1][0]
+
+    def linearised(self) -> "KawabataCurves":
+        """The one-segment version: each curve replaced by its secant to the last point."""
+        return KawabataCurves(*(tuple([c[-1]]) for c in (self.tensile_warp, self.tensile_weft, self.shear, self.bending)))
+
+
 def _p(name, g_m2, stretch_pct, bending, friction=0.4, thickness_mm=1.0, weft_pct=None):
     w = stretch_pct if weft_pct is None else weft_pct
     return Fabric(name, g_m2 * 1e-3, stretch_pct * 1e-2, w * 1e-2, bending, friction, thickness_mm * 1e-3)
@@ -100,24 +165,59 @@ PRESETS: dict[str, Fabric] = {
 }
 """Named fabrics, light to heavy. ``heavy_leather`` is Carignan's 1.0 g/cm² extreme."""
 
+def _kes(name, g_m2, warp, weft, shear_g, bending_b, friction=0.4, thickness_mm=0.5):
+    """A Kawabata fabric from five-segment tensile curves [(strain, N/m)], shear G and bending B.
+
+    Shear is given as KES G (gf/cm/deg) and bending as KES B (gf·cm²/cm), converted to SI; their
+    curves are mildly stiffening five-segment lines whose mean slope is G and B.
+    """
+    g_si = shear_g * 9.80665e-3 / 1e-2 * 180 / math.pi  # N/m per rad
+    b_si = bending_b * 9.80665e-3 * 1e-4 / 1e-2  # N·m per m width × m = N·m
+    shear = tuple((a, g_si * a * (0.8 + 0.1 * k)) for k, a in enumerate((0.015, 0.03, 0.05, 0.07, 0.087)))
+    bend = tuple((kappa, b_si * kappa * (0.8 + 0.1 * k)) for k, kappa in enumerate((30.0, 60.0, 90.0, 120.0, 150.0)))
+    curves = KawabataCurves(tuple(warp), tuple(weft), shear, bend)
+    rho = g_m2 * 1e-3
+    lam_warp = hanging_strain(rho, KawabataCurves.initial_slope(curves.tensile_warp))
+    lam_weft = hanging_strain(rho, KawabataCurves.initial_slope(curves.tensile_weft))
+    c = b_si / (rho * 9.80665 * 1e-6)
+    return Fabric(name, rho, lam_warp, lam_weft, c, friction, thickness_mm * 1e-3, curves)
+
+
+KAWABATA_FABRICS: dict[str, Fabric] = {
+    f.name: f
+    for f in (
+        # Representative KES-F data (not the paper's unpublished curves): J-shaped tensile curves
+        # f = F_m·(ε/EMT)^p reaching F_m = 500 gf/cm at EMT, with LT = 2/(p + 1).
+        _kes("bottino_a", 138,
+             warp=[(0.005, 4.1), (0.01, 17.7), (0.02, 73.0), (0.03, 170.0), (0.05, 490.0)],
+             weft=[(0.008, 4.1), (0.016, 17.7), (0.032, 73.0), (0.048, 170.0), (0.08, 490.0)],
+             shear_g=0.6, bending_b=0.07),
+        _kes("bottino_b", 291,
+             warp=[(0.006, 2.3), (0.012, 11.6), (0.024, 58.0), (0.036, 149.0), (0.06, 490.0)],
+             weft=[(0.009, 2.3), (0.018, 11.6), (0.036, 58.0), (0.054, 149.0), (0.09, 490.0)],
+             shear_g=0.5, bending_b=0.12, thickness_mm=0.8),
+    )
+}
+"""Kawabata-described fabrics for Bottino et al.'s experiments: A (cotton-like, 138 g/m²) and
+B (wool, 291 g/m²), five-segment curves; ``.linearised()`` gives the one-segment variant."""
+
 DEFAULT_FABRIC = "cotton"
 """Fabric used when a pattern names none."""
 
 
 def fabric_names() -> tuple[str, ...]:
-    """Preset names, light to heavy."""
-    return tuple(PRESETS)
+    """Every fabric name: presets light to heavy, then the Kawabata fabrics."""
+    return (*PRESETS, *KAWABATA_FABRICS)
 
 
 def preset(name: str) -> Fabric:
     """The preset fabric called ``name``; raises :class:`FabricError` naming the choices."""
     try:
-        return PRESETS[name]
+        return PRESETS[name] if name in PRESETS else KAWABATA_FABRICS[name]
     except (KeyError, TypeError):
         import difflib
 
-        close = difflib.get_close_matches(str(name), PRESETS, n=1)
+        names = [*PRESETS, *KAWABATA_FABRICS]
+        close = difflib.get_close_matches(str(name), names, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise FabricError(
-            f"unknown fabric {name!r}{hint}; choose one of {', '.join(PRESETS)}"
-        ) from None
+        raise FabricError(f"unknown fabric {name!r}{hint}; choose one of {', '.join(names)}") from None

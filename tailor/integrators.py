@@ -17,13 +17,19 @@ body's velocity for an attachment). No integrator changes the model or the state
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
+
 from .errors import SimulationUnstable
 from .forces.jacobian import SparsePattern, jacobian_data
 from .forces.kernels import jacobi_pcg
 from .model import State
 
 __all__ = ["INTEGRATORS", "make_integrator", "ForwardEuler", "SymplecticEuler", "Verlet", "RK4", "ImplicitEuler"]
+
+
+log = logging.getLogger(__name__)
 
 
 def _acceleration(model, f):
@@ -123,6 +129,10 @@ class ImplicitEuler:
         self._warm = None
         self.last_iterations = 0
 
+    def reset(self):
+        """Forget the warm start (the next solve starts from the explicit estimate)."""
+        self._warm = None
+
     def _pattern_for(self, model):
         if self._pattern_model is not model:
             self._pattern = SparsePattern(model)
@@ -154,6 +164,8 @@ class ImplicitEuler:
             pattern.indptr, pattern.cols, data, rhs, dv, 1.0 / data[pattern.diagonal_slots], self.tolerance, self.max_iterations
         )
         self.last_iterations = iterations
+        if not converged:
+            log.warning("implicit step at t = %.4f s: CG stopped after %d iterations before reaching %.0e", state.t, iterations, self.tolerance)
         if not np.all(np.isfinite(dv)) or (not converged and iterations < self.max_iterations):
             raise SimulationUnstable(
                 f"implicit solve failed at t = {state.t:.4f} s (Δt = {dt:.3g} s): the system is not positive definite; "

@@ -16,7 +16,7 @@ from .errors import FabricError
 from .fabric import Fabric
 from .geometry import face_areas, hinge_angle_gradients, hinge_angles, unique_edges
 from .mesh import GarmentMesh
-from .params import SAFETY, fabric_params, stable_time_step
+from .params import SAFETY, element_frequencies, fabric_params, stable_time_step, symplectic_limit
 from .topology import hinges
 from .units import GRAVITY
 
@@ -64,6 +64,10 @@ class Model:
     hinge_vertices : (B, 4) int
         ``[e0, e1, o0, o1]``: a shared edge and the two opposite vertices.
     hinge_rest_angle : (B,) [rad]
+    hinge_panel : (B,) int
+        Panel of each hinge's first triangle.
+    hinge_curvature_scale : (B,) [1/m]
+        κ = scale·|θ|: the curvature a hinge angle stands for (so that ½kθ² = ½Bκ²A).
     hinge_stiffness : (B,) [N·m]
         k = c·B·|e|²/(A₀ + A₁), c calibrated per panel so Σ ½k(θ − θ₀)² equals ½∫B·κ² dA on
         cylinders (Eq. 25).
@@ -82,6 +86,8 @@ class Model:
         One of :data:`ELASTIC_MODELS`.
     params : tuple of Params
         Derived parameters of each panel's fabric (for reports).
+    curves : tuple of KawabataCurves or None
+        Per panel, measured curves that replace the linear law (:mod:`tailor.forces.kawabata`).
     """
 
     rest_uv: np.ndarray
@@ -100,6 +106,8 @@ class Model:
     hinge_vertices: np.ndarray
     hinge_rest_angle: np.ndarray
     hinge_stiffness: np.ndarray
+    hinge_panel: np.ndarray
+    hinge_curvature_scale: np.ndarray
     spring_vertices: np.ndarray
     spring_rest_length: np.ndarray
     spring_stiffness: np.ndarray
@@ -110,6 +118,7 @@ class Model:
     time_step: float = 1e-3
     elastic: str = "membrane"
     params: tuple = field(default=(), repr=False)
+    curves: tuple = field(default=(), repr=False)
 
     @property
     def vertex_count(self) -> int:
@@ -125,6 +134,11 @@ class Model:
     def has_bending(self) -> bool:
         """Whether any hinge resists bending (skip the pass when not)."""
         return bool(len(self.hinge_stiffness)) and bool(np.any(self.hinge_stiffness > 0))
+
+    @property
+    def has_curves(self) -> bool:
+        """Whether any panel follows measured Kawabata curves."""
+        return any(c is not None for c in self.curves)
 
     @property
     def total_mass(self) -> float:
@@ -194,6 +208,12 @@ def _walker_springs(uv, faces, hv, hf, face_stretch, face_rigidity):
     stiffness = np.concatenate([k_struct, k_flex])
     rest = np.linalg.norm(uv[pairs[:, 0]] - uv[pairs[:, 1]], axis=1)
     return pairs, stiffness, rest
+
+
+def _max_slope(curve) -> float:
+    xs = [0.0] + [p[0] for p in curve]
+    ys = [0.0] + [p[1] for p in curve]
+    return max((b - a) / (d - c) for a, b, c, d in zip(ys, ys[1:], xs, xs[1:]))
 
 
 def _calibrated_hinge_stiffness(uv, faces, hv, hf, base, rigidity, area, face_panel):
@@ -278,6 +298,18 @@ def build_model(
 
     rho = per_face("density")
     k1, k2, k12 = per_face("stretch_warp"), per_face("stretch_weft"), per_face("stretch_shear")
+    curves = tuple(fabrics[i].kawabata for i in range(panel_count))
+    k_fast = [k1.copy(), k2.copy(), k12.copy()]  # stiffest slopes, for damping and the time step
+    for pi, c in enumerate(curves):
+        if c is None:
+            continue
+        sel = fp == pi
+        k1[sel] = c.initial_slope(c.tensile_warp)
+        k2[sel] = c.initial_slope(c.tensile_weft)
+        k12[sel] = 2.0 * c.initial_slope(c.shear)
+        k_fast[0][sel] = _max_slope(c.tensile_warp)
+        k_fast[1][sel] = _max_slope(c.tensile_weft)
+        k_fast[2][sel] = 2.0 * _max_slope(c.shear)
     n = len(uv)
     mass = np.bincount(faces.reshape(-1), weights=np.repeat(rho * area / 3.0, 3), minlength=n)
 
@@ -286,13 +318,16 @@ def build_model(
     e_len2 = np.sum((uv[hv[:, 0]] - uv[hv[:, 1]]) ** 2, axis=1)
     hinge_b = 0.5 * (rigidity[hf[:, 0]] + rigidity[hf[:, 1]])  # panels may differ across a seam
     hinge_k = _calibrated_hinge_stiffness(uv, faces, hv, hf, hinge_b * e_len2 / (area[hf[:, 0]] + area[hf[:, 1]]), rigidity, area, fp)
+    pair_area = area[hf[:, 0]] + area[hf[:, 1]]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        curvature_scale = np.where(hinge_b > 0, np.sqrt(3.0 * hinge_k / np.maximum(hinge_b, 1e-300) / pair_area), 3.0 * np.sqrt(e_len2) / pair_area)
 
     springs, ks, rest = _walker_springs(uv, faces, hv, hf, np.maximum(k1, k2), rigidity)
     m_pair = 0.5 * (mass[springs[:, 0]] + mass[springs[:, 1]])
     kd = damping * np.sqrt(ks * m_pair)  # Eq. 26 for the relative motion of two masses: 2√(k·m/2)
 
     dm_inv = _grain_frame_dm_inv(uv, faces, np.asarray(mesh.face_grain, float))
-    omega_face = _element_frequencies(dm_inv, area, rho, k1, k2, k12)
+    omega_face = element_frequencies(dm_inv, area, rho, *k_fast)
     omega_bend = _bending_frequency(uv, hv, hinge_k, mass)
     tri = uv[faces]
     longest = np.max(np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2), axis=1)
@@ -304,7 +339,7 @@ def build_model(
     # never above the exact stability bound of symplectic Euler for the fastest damped mode
     omega_max = float(np.sqrt(np.max(omega_face, initial=0.0) ** 2 + omega_bend**2))
     if omega_max > 0:
-        dt = min(dt, 0.9 * _symplectic_limit(damping) / omega_max)
+        dt = min(dt, 0.9 * symplectic_limit(damping) / omega_max)
     pin_mask = np.zeros(n, bool)
     if pinned is not None:
         pin_mask[np.asarray(pinned)] = True
@@ -325,6 +360,8 @@ def build_model(
         hinge_vertices=_frozen(hv),
         hinge_rest_angle=_frozen(np.zeros(len(hv))),
         hinge_stiffness=_frozen(hinge_k),
+        hinge_panel=_frozen(fp[hf[:, 0]] if len(hf) else np.zeros(0, np.intp)),
+        hinge_curvature_scale=_frozen(curvature_scale),
         spring_vertices=_frozen(springs),
         spring_rest_length=_frozen(rest),
         spring_stiffness=_frozen(ks),
@@ -335,30 +372,8 @@ def build_model(
         time_step=float(dt),
         elastic=elastic,
         params=params,
+        curves=curves,
     )
-
-
-def _element_frequencies(dm_inv, area, rho, k1, k2, k12):
-    """Fastest natural frequency ω_e [rad/s] of each free triangle with lumped corner masses.
-
-    K_e = A·Σ cᵢ∇Eᵢ∇Eᵢᵀ at rest and M_e = (ρA/3)·I, so ω_e² = 3·λ_max(K_e)/(ρA). Over the whole
-    mesh, ω_max ≤ max_e ω_e (lumped masses partition by element), a safe bound for Δt.
-    """
-    if not len(area):
-        return np.zeros(0)
-    w1 = np.stack([-(dm_inv[:, 0, 0] + dm_inv[:, 1, 0]), dm_inv[:, 0, 0], dm_inv[:, 1, 0]], axis=1)
-    w2 = np.stack([-(dm_inv[:, 0, 1] + dm_inv[:, 1, 1]), dm_inv[:, 0, 1], dm_inv[:, 1, 1]], axis=1)
-    e1, e2 = np.array([1.0, 0.0]), np.array([0.0, 1.0])  # rest F = I in the panel plane
-    g11 = (w1[:, :, None] * e1).reshape(-1, 6)
-    g22 = (w2[:, :, None] * e2).reshape(-1, 6)
-    g12 = 0.5 * (w1[:, :, None] * e2 + w2[:, :, None] * e1).reshape(-1, 6)
-    k = (
-        k1[:, None, None] * g11[:, :, None] * g11[:, None, :]
-        + k2[:, None, None] * g22[:, :, None] * g22[:, None, :]
-        + 2.0 * k12[:, None, None] * g12[:, :, None] * g12[:, None, :]
-    )
-    lam = np.linalg.eigvalsh(k)[:, -1]  # out-of-plane dofs have no stiffness at rest
-    return np.sqrt(3.0 * lam / rho)
 
 
 def _bending_frequency(uv, hv, hinge_k, mass):
@@ -370,8 +385,3 @@ def _bending_frequency(uv, hv, hinge_k, mass):
     row = g * (hinge_k * g.sum(axis=1))[:, None]
     bound = np.bincount(hv.reshape(-1), row.reshape(-1), minlength=len(uv))
     return float(np.sqrt(bound.max()))
-
-
-def _symplectic_limit(zeta: float) -> float:
-    """Largest ω·Δt for which symplectic Euler is stable on ẍ + 2ζωẋ + ω²x = 0 (Jury criterion)."""
-    return min(2.0 * (np.sqrt(zeta * zeta + 1.0) - zeta), 1.0 / zeta if zeta > 0 else np.inf)

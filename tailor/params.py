@@ -19,8 +19,12 @@ carry over to triangles and are made independent of the discretisation where the
 * **Bending** (Eq. 25) ξ = c·m·g·h⁴ on the grid; with m = ρh² the continuum flexural rigidity is
   B = c·ρ·g·ℓ³ with the grid length replaced by a fixed ℓ = 1 cm, so **c is the cube of Peirce's
   bending length in cm** (B/(ρg) = C³): silk ≈ 1, cotton ≈ 8, denim ≈ 60. c = 0: no bending.
-* **Damping** (Eq. 26) γ = 2h√(mη): critical damping of the strain rate for one element of size h
-  ("the ideal case of a single mass"); per triangle, h is its characteristic length √(2A).
+* **Damping** (Eq. 26) γ = 2h√(mη) is critical damping for "the ideal case of a single mass": it
+  equals 2η/ω with the single-mass frequency ω = √(η/m)/h. On triangles we use each element's exact
+  fastest frequency ω_e instead, φ = 2η/ω_e, so the mesh's noisiest mode is exactly critically
+  damped and nothing slower is (rigid motion, swinging and draping are untouched).
+* The explicit step is also kept at 0.9× the exact stability bound of symplectic Euler for that
+  critically damped fastest mode.
 
 Examples
 --------
@@ -37,9 +41,11 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+import numpy as np
 from scipy.optimize import brentq
 
 from .fabric import Fabric
+from .hanging import REFERENCE_HEIGHT, _mean_strain_of_hanging_strip, hanging_strain
 from .units import CM, GRAVITY
 
 __all__ = [
@@ -48,43 +54,19 @@ __all__ = [
     "stretch_stiffness",
     "hanging_strain",
     "bending_rigidity",
-    "critical_damping",
+    "element_frequencies",
+    "symplectic_limit",
     "stable_time_step",
     "REFERENCE_HEIGHT",
     "BENDING_LENGTH_UNIT",
     "SAFETY",
 ]
 
-REFERENCE_HEIGHT = 1.0
-"""Height [m] of the hanging strip that defines the stretch percentage (Eq. 22)."""
-
 BENDING_LENGTH_UNIT = 1.0 * CM
 """The fixed length ℓ [m] replacing Eq. 25's grid spacing: B = c·ρ·g·ℓ³."""
 
 SAFETY = 2.0
 """Eq. 24's l: a wave crosses at most 1/l of an element per step (the paper suggests 2 or 3)."""
-
-
-def _mean_strain_of_hanging_strip(top_stretch: float) -> float:
-    """Mean strain of a Green-strain strip whose top stretch ratio is S, per unit τ = ρgH/η.
-
-    Tension at rest height y above the free end: η·½(s²−1)·s = ρ·g·y, i.e. s³ − s = 2t with
-    t = ρgy/η. Integrating s dt from s = 1 to S in closed form gives the mean stretch.
-    """
-    s = top_stretch
-    tau = 0.5 * (s**3 - s)
-    integral = (3.0 * s**4 / 8.0 - s**2 / 4.0) - (3.0 / 8.0 - 1.0 / 4.0)
-    return integral / tau - 1.0
-
-
-def hanging_strain(density: float, stiffness: float, height: float = REFERENCE_HEIGHT) -> float:
-    """Mean strain ΔH/H of a strip of ``height`` [m] hanging under its own weight.
-
-    Parameters: ``density`` ρ [kg/m²], ``stiffness`` η [N/m] of the Green-strain membrane.
-    """
-    tau = density * GRAVITY * height / stiffness
-    top = brentq(lambda s: s**3 - s - 2.0 * tau, 1.0, 2.0 + 2.0 * tau)
-    return _mean_strain_of_hanging_strip(top)
 
 
 def stretch_stiffness(density: float, stretch: float) -> float:
@@ -102,14 +84,6 @@ def bending_rigidity(density: float, c: float) -> float:
     return c * density * GRAVITY * BENDING_LENGTH_UNIT**3
 
 
-def critical_damping(density: float, stiffness: float, length: float) -> float:
-    """Strain-rate damping coefficient φ = 2·h·√(ρη) [N·s/m] (Eq. 26) for elements of size ``length``.
-
-    A single element of mass ρh² on a spring η returns to rest without oscillating.
-    """
-    return 2.0 * length * math.sqrt(density * stiffness)
-
-
 def stable_time_step(density, stiffness, rigidity, altitude, *, safety: float = SAFETY) -> float:
     """Eq. 24: Δt = (h / v) / l with v = √(η/ρ) (Eq. 23), bounded by the bending wave too [s].
 
@@ -120,6 +94,34 @@ def stable_time_step(density, stiffness, rigidity, altitude, *, safety: float = 
     if rigidity > 0:
         dt = min(dt, altitude**2 / (math.pi * math.sqrt(rigidity / density)) / safety)
     return dt
+
+
+def element_frequencies(dm_inv, area, rho, k1, k2, k12):
+    """Fastest natural frequency ω_e [rad/s] of each free triangle with lumped corner masses.
+
+    K_e = A·Σ cᵢ∇Eᵢ∇Eᵢᵀ at rest and M_e = (ρA/3)·I, so ω_e² = 3·λ_max(K_e)/(ρA). Over the whole
+    mesh, ω_max ≤ max_e ω_e (lumped masses partition by element), a safe bound for Δt.
+    """
+    if not len(area):
+        return np.zeros(0)
+    w1 = np.stack([-(dm_inv[:, 0, 0] + dm_inv[:, 1, 0]), dm_inv[:, 0, 0], dm_inv[:, 1, 0]], axis=1)
+    w2 = np.stack([-(dm_inv[:, 0, 1] + dm_inv[:, 1, 1]), dm_inv[:, 0, 1], dm_inv[:, 1, 1]], axis=1)
+    e1, e2 = np.array([1.0, 0.0]), np.array([0.0, 1.0])  # rest F = I in the panel plane
+    g11 = (w1[:, :, None] * e1).reshape(-1, 6)
+    g22 = (w2[:, :, None] * e2).reshape(-1, 6)
+    g12 = 0.5 * (w1[:, :, None] * e2 + w2[:, :, None] * e1).reshape(-1, 6)
+    k = (
+        k1[:, None, None] * g11[:, :, None] * g11[:, None, :]
+        + k2[:, None, None] * g22[:, :, None] * g22[:, None, :]
+        + 2.0 * k12[:, None, None] * g12[:, :, None] * g12[:, None, :]
+    )
+    lam = np.linalg.eigvalsh(k)[:, -1]  # out-of-plane dofs have no stiffness at rest
+    return np.sqrt(3.0 * lam / rho)
+
+
+def symplectic_limit(zeta: float) -> float:
+    """Largest ω·Δt for which symplectic Euler is stable on ẍ + 2ζωẋ + ω²x = 0 (Jury criterion)."""
+    return min(2.0 * (np.sqrt(zeta * zeta + 1.0) - zeta), 1.0 / zeta if zeta > 0 else np.inf)
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,11 +139,11 @@ class Params:
     bending_rigidity : float
         B [N·m] (Eq. 25).
     damping_warp, damping_weft, damping_shear : float
-        φ [N·s/m] for elements of the given resolution (Eq. 26).
+        φ [N·s/m] for equilateral elements of the given resolution (Eq. 26).
     resolution : float
         Element size h [m] these were derived for.
     time_step : float
-        Δt [s] (Eq. 24) for an element altitude of ``resolution · √3/2``.
+        Δt [s] (Eq. 24) for equilateral elements of side ``resolution``.
     """
 
     density: float
@@ -170,6 +172,11 @@ def fabric_params(fabric: Fabric, resolution: float, *, safety: float = SAFETY) 
     k12 = math.sqrt(k1 * k2)
     bend = bending_rigidity(rho, fabric.bending)
     altitude = resolution * math.sqrt(3.0) / 2.0
+    # an equilateral element of side h, warp along one edge: its fastest frequency sets Eq. 26
+    dm_inv = np.linalg.inv(np.array([[[resolution, 0.5 * resolution], [0.0, altitude]]]))
+    area = np.array([0.5 * resolution * altitude])
+    omega = float(element_frequencies(dm_inv, area, np.array([rho]), np.array([k1]), np.array([k2]), np.array([k12]))[0])
+    dt = stable_time_step(rho, max(k1, k2), bend, altitude, safety=safety)
     return Params(
         density=rho,
         stretch_warp=k1,
@@ -178,9 +185,9 @@ def fabric_params(fabric: Fabric, resolution: float, *, safety: float = SAFETY) 
         wave_speed_warp=math.sqrt(k1 / rho),
         wave_speed_weft=math.sqrt(k2 / rho),
         bending_rigidity=bend,
-        damping_warp=critical_damping(rho, k1, resolution),
-        damping_weft=critical_damping(rho, k2, resolution),
-        damping_shear=critical_damping(rho, k12, resolution),
+        damping_warp=2.0 * k1 / omega,
+        damping_weft=2.0 * k2 / omega,
+        damping_shear=2.0 * k12 / omega,
         resolution=resolution,
-        time_step=stable_time_step(rho, max(k1, k2), bend, altitude, safety=safety),
+        time_step=min(dt, 0.9 * symplectic_limit(1.0) / omega),
     )

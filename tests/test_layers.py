@@ -10,7 +10,7 @@ PKG = Path(__file__).resolve().parents[1] / "tailor"
 # module → layer; a module may import tailor modules of the same or a lower layer only
 LAYERS = {
     "errors": 0, "units": 0, "landmarks": 0,
-    "geometry": 1, "curves": 1, "topology": 1,
+    "geometry": 1, "curves": 1, "topology": 1, "hanging": 1,
     "pattern": 2, "fabric": 2, "body": 2,
     "mesh": 3, "seams": 3, "placement": 3, "mannequin": 3,
     "params": 4, "model": 4,

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .bending import bending_energy, bending_forces
+from .kawabata import secant_hinge_stiffness, secant_membrane_stiffness
 from .kernels import bending_forces_into, membrane_forces_into
 from .external import air_forces, gravity_energy, gravity_forces
 from .membrane import damping_forces, dissipation, stretch_energy, stretch_forces
@@ -40,12 +41,13 @@ def internal_forces(model, state, out=None) -> np.ndarray:
     numpy reference functions of :mod:`.membrane` and :mod:`.bending` to round-off.
     """
     out = np.zeros_like(state.x) if out is None else out
+    curves = model.has_curves
     if model.elastic == "springs":
         spring_forces(model, state, out)
     else:
-        membrane_forces_into(model, state, out)
+        membrane_forces_into(model, state, out, stiffness=secant_membrane_stiffness(model, state.x) if curves else None)
     if model.has_bending:
-        bending_forces_into(model, state, out)
+        bending_forces_into(model, state, out, stiffness=secant_hinge_stiffness(model, state.x) if curves else None)
     return out
 
 

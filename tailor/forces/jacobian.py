@@ -18,6 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import hinge_angle_gradients
+from .kawabata import secant_hinge_stiffness, secant_membrane_stiffness
 from .kernels import bending_jacobian_into, membrane_jacobian_into
 from .membrane import membrane_gradients
 
@@ -115,9 +116,12 @@ def jacobian_data(model, state, pattern: SparsePattern):
         return k.data, c.data
     kdata = np.zeros(pattern.nnz)
     cdata = np.zeros(pattern.nnz)
-    membrane_jacobian_into(model, state.x, pattern.positions[0], kdata, cdata)
+    curves = model.has_curves  # Kawabata: secant stiffness in the Newton step too
+    membrane_jacobian_into(model, state.x, pattern.positions[0], kdata, cdata,
+                           stiffness=secant_membrane_stiffness(model, state.x) if curves else None)
     if model.has_bending:
-        bending_jacobian_into(model, state.x, pattern.positions[1], kdata)
+        bending_jacobian_into(model, state.x, pattern.positions[1], kdata,
+                              stiffness=secant_hinge_stiffness(model, state.x) if curves else None)
     return kdata, cdata
 
 

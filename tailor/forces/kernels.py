@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 __all__ = [
     "membrane_forces_into",
@@ -23,8 +24,8 @@ __all__ = [
 
 
 @njit(cache=True)
-def _membrane(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, damp, out):
-    for f in range(faces.shape[0]):
+def _membrane_range(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, damp, out, start, stop):
+    for f in range(start, stop):
         i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
         a00, a01, a10, a11 = dm[f, 0, 0], dm[f, 0, 1], dm[f, 1, 0], dm[f, 1, 1]
         d1x, d1y, d1z = x[i1, 0] - x[i0, 0], x[i1, 1] - x[i0, 1], x[i1, 2] - x[i0, 2]
@@ -61,8 +62,8 @@ def _membrane(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, damp, out):
 
 
 @njit(cache=True)
-def _bending(x, hinges, stiffness, rest, out):
-    for h in range(hinges.shape[0]):
+def _bending_range(x, hinges, stiffness, rest, out, start, stop):
+    for h in range(start, stop):
         j0, j1, j2, j3 = hinges[h, 0], hinges[h, 1], hinges[h, 2], hinges[h, 3]
         ex, ey, ez = x[j1, 0] - x[j0, 0], x[j1, 1] - x[j0, 1], x[j1, 2] - x[j0, 2]
         ax, ay, az = x[j2, 0] - x[j0, 0], x[j2, 1] - x[j0, 1], x[j2, 2] - x[j0, 2]
@@ -98,18 +99,58 @@ def _bending(x, hinges, stiffness, rest, out):
         out[j3, 2] -= el * w1 * n1z
 
 
-def membrane_forces_into(model, state, out, *, damping: bool = True) -> None:
-    """Add stretch (and strain-rate damping) forces of every triangle into ``out`` [N]."""
-    _membrane(
+_CHUNK = 4096  # elements per task: below this one thread does it all (no buffer overhead)
+
+
+@njit(cache=True, parallel=True)
+def _membrane_parallel(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, damp, out, tasks):
+    buf = np.zeros((tasks, out.shape[0], 3))
+    n = faces.shape[0]
+    for t in prange(tasks):
+        _membrane_range(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, damp, buf[t], n * t // tasks, n * (t + 1) // tasks)
+    for t in range(tasks):
+        out += buf[t]
+
+
+@njit(cache=True, parallel=True)
+def _bending_parallel(x, hinges, stiffness, rest, out, tasks):
+    buf = np.zeros((tasks, out.shape[0], 3))
+    n = hinges.shape[0]
+    for t in prange(tasks):
+        _bending_range(x, hinges, stiffness, rest, buf[t], n * t // tasks, n * (t + 1) // tasks)
+    for t in range(tasks):
+        out += buf[t]
+
+
+def membrane_forces_into(model, state, out, *, damping: bool = True, stiffness=None) -> None:
+    """Add stretch (and strain-rate damping) forces of every triangle into ``out`` [N].
+
+    ``stiffness`` = (η₁₁, η₂₂, η₁₂) per face overrides the model's (Kawabata secants). Large meshes
+    are split over the available cores, each thread summing into its own buffer.
+    """
+    k1, k2, k12 = stiffness if stiffness is not None else (model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear)
+    args = (
         state.x, state.v, model.faces, model.face_dm_inv, model.face_rest_area,
-        model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear,
+        k1, k2, k12,
         model.face_damping_warp, model.face_damping_weft, model.face_damping_shear, damping, out,
     )
+    tasks = numba.get_num_threads()
+    if model.face_count >= _CHUNK and tasks > 1:
+        _membrane_parallel(*args, tasks)
+    else:
+        _membrane_range(*args, 0, model.face_count)
 
 
-def bending_forces_into(model, state, out) -> None:
-    """Add dihedral bending forces of every hinge into ``out`` [N]."""
-    _bending(state.x, model.hinge_vertices, model.hinge_stiffness, model.hinge_rest_angle, out)
+def bending_forces_into(model, state, out, *, stiffness=None) -> None:
+    """Add dihedral bending forces of every hinge into ``out`` [N] (``stiffness`` overrides the model's)."""
+    k = model.hinge_stiffness if stiffness is None else stiffness
+    args = (state.x, model.hinge_vertices, k, model.hinge_rest_angle, out)
+    n = len(model.hinge_vertices)
+    tasks = numba.get_num_threads()
+    if n >= _CHUNK and tasks > 1:
+        _bending_parallel(*args, tasks)
+    else:
+        _bending_range(*args, 0, n)
 
 
 @njit(cache=True)
@@ -205,18 +246,19 @@ def _bending_jacobian(x, hinges, stiffness, pos, kdata):
                 kdata[pos[h, 12 * r + c]] += kh * g[r] * g[c]
 
 
-def membrane_jacobian_into(model, x, positions, kdata, cdata) -> None:
+def membrane_jacobian_into(model, x, positions, kdata, cdata, *, stiffness=None) -> None:
     """Add the membrane stiffness and damping Jacobian entries into CSR data arrays."""
+    k1, k2, k12 = stiffness if stiffness is not None else (model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear)
     _membrane_jacobian(
         x, model.faces, model.face_dm_inv, model.face_rest_area,
-        model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear,
+        k1, k2, k12,
         model.face_damping_warp, model.face_damping_weft, model.face_damping_shear, positions, kdata, cdata,
     )
 
 
-def bending_jacobian_into(model, x, positions, kdata) -> None:
+def bending_jacobian_into(model, x, positions, kdata, *, stiffness=None) -> None:
     """Add the bending stiffness Jacobian entries into a CSR data array."""
-    _bending_jacobian(x, model.hinge_vertices, model.hinge_stiffness, positions, kdata)
+    _bending_jacobian(x, model.hinge_vertices, model.hinge_stiffness if stiffness is None else stiffness, positions, kdata)
 
 
 @njit(cache=True)

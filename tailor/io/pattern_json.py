@@ -26,7 +26,7 @@ import numpy as np
 
 from ..curves import Curve
 from ..errors import FabricError, PatternError
-from ..fabric import DEFAULT_FABRIC, PRESETS, Fabric, preset
+from ..fabric import DEFAULT_FABRIC, Fabric, KawabataCurves, fabric_names, preset
 from ..landmarks import LANDMARKS
 from ..pattern import (
     ATTACHMENT_TARGETS,
@@ -59,7 +59,15 @@ _SIDE = {"panel", "edge", "hole", "range"}
 _STITCH = {"between", "orientation", "label"}
 _ATTACH = {"panel", "edge", "vertex", "hole", "range", "to"}
 _PLACEMENT = {"landmark", "angle", "anchor", "offset", "clearance"}
-_FABRIC = {"preset", "density", "stretch", "stretch_weft", "bending", "friction", "thickness"}
+_FABRIC = {"preset", "density", "stretch", "stretch_weft", "bending", "friction", "thickness", "kawabata"}
+_KAWABATA = {"tensile_warp", "tensile_weft", "shear", "bending"}
+# file units of each Kawabata curve → SI: (deformation, load) scale factors
+_KAWABATA_UNITS = {
+    "tensile_warp": (PERCENT, 1.0),  # [% strain, N/m]
+    "tensile_weft": (PERCENT, 1.0),
+    "shear": (DEG, 1.0),  # [degrees, N/m]
+    "bending": (100.0, 1.0),  # [1/cm, N·m/m]
+}
 _ORIENTATIONS = ("auto", "opposite", "same")
 _DECISIVE = 0.1  # placement must separate the two pairings by 10 % of the seam length
 
@@ -140,8 +148,8 @@ def _fabric(node: Node) -> Fabric:
     if isinstance(node.value, str):
         return _checked(node, lambda: preset(node.value))
     node.as_object(_FABRIC)
-    base_name = node.key("preset", DEFAULT_FABRIC).as_str(tuple(PRESETS))
-    base = PRESETS[base_name]
+    base_name = node.key("preset", DEFAULT_FABRIC).as_str(fabric_names())
+    base = preset(base_name)
     values = {}
     if node.has("density"):
         values["density"] = node.key("density").as_number(positive=True) * G_PER_M2
@@ -156,8 +164,20 @@ def _fabric(node: Node) -> Fabric:
         values["friction"] = node.key("friction").as_number(minimum=0)
     if node.has("thickness"):
         values["thickness"] = node.key("thickness").as_number(positive=True) * MM
+    if node.has("kawabata"):
+        values["kawabata"] = _kawabata(node.key("kawabata"))
     label = base_name if not values else f"{base_name} (custom)"
     return _checked(node, lambda: base.with_values(name=label, **values))
+
+
+def _kawabata(node: Node) -> KawabataCurves:
+    node.as_object(_KAWABATA)
+    curves = {}
+    for name, (sx, sy) in _KAWABATA_UNITS.items():
+        c = node.key(name)
+        c.as_list(min_length=1)
+        curves[name] = tuple((p[0] * sx, p[1] * sy) for p in (pt.as_point(2) for pt in c.items()))
+    return _checked(node, lambda: KawabataCurves(**curves))
 
 
 def _checked(node: Node, make):

@@ -36,3 +36,32 @@ def test_wind_on_a_still_sheet_equals_drag_of_the_moving_sheet():
     blown = air_forces(model, model.state(x0), wind=[0.0, 0.0, 3.0])
     moving = air_forces(model, model.state(x0, np.tile([0.0, 0.0, -3.0], (len(x0), 1))))
     assert np.allclose(blown, moving)
+
+
+def test_calm_wind_changes_nothing_and_force_scales_with_speed_squared():
+    from tailor.forces.wind import Wind
+
+    model, x0 = sheet(20, 20, 0.05, vertical=True, air_density=AIR_DENSITY)  # a flag facing ±y
+    still = air_forces(model, model.state(x0))
+    assert np.all(air_forces(model, model.state(x0), wind=Wind(speed=0.0)) == still)
+    push = [air_forces(model, model.state(x0), wind=Wind(speed=u, direction=(0, 1, 0), turbulence=0.0))[:, 1].sum() for u in (5, 10)]
+    assert push[1] / push[0] == pytest.approx(4.0, rel=1e-12)
+    edge_on = air_forces(model, model.state(x0), wind=Wind(speed=10, direction=(1, 0, 0), turbulence=0.0))
+    assert np.abs(edge_on).max() < 1e-12  # wind along the cloth's plane does not push it
+
+
+def test_turbulent_wind_is_smooth_deterministic_and_has_the_requested_mean():
+    from tailor.forces.wind import Wind
+
+    rng = np.random.default_rng(1)
+    p = rng.uniform(0, 3, (5000, 3))
+    w = Wind(speed=8.0, direction=(1, 1, 0), turbulence=0.4, seed=3)
+    v = w(p, 1.7)
+    assert np.allclose(v, Wind(speed=8.0, direction=(1, 1, 0), turbulence=0.4, seed=3)(p, 1.7))
+    assert np.linalg.norm(v.mean(axis=0) - 8.0 * np.array([1, 1, 0]) / np.sqrt(2)) < 0.5
+    assert 0.2 < v.std(axis=0).mean() < 0.4 * 8.0  # gusty, within ±τ·U
+    # smooth (differentiable): a ten times smaller step changes the field ten times less
+    for shift in (lambda d: (p + d, 1.7), lambda d: (p, 1.7 + d)):
+        big = np.abs(w(*shift(1e-4)) - v).max()
+        small = np.abs(w(*shift(1e-5)) - v).max()
+        assert 8.0 < big / small < 12.0 and big < 0.05

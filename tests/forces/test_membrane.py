@@ -102,3 +102,35 @@ def test_warp_and_weft_have_their_own_stiffness():
     pull_x = stretch_energy(model, model.state(x0 * [1.02, 1.0, 1.0]))
     assert pull_y / pull_x == pytest.approx(model.face_stretch_warp[0] / model.face_stretch_weft[0], rel=1e-9)
     assert model.face_stretch_warp[0] > model.face_stretch_weft[0]
+
+
+def test_kawabata_stress_lies_on_the_measured_curve():
+    from tailor.fabric import KAWABATA_FABRICS
+    from tailor.forces import internal_forces
+
+    fabric = KAWABATA_FABRICS["bottino_a"]
+    for curves in (fabric.kawabata, fabric.kawabata.linearised()):
+        model, x0 = sheet(10, 10, 0.02, fabric.with_values(kawabata=curves), vertical=False, grain=0, damping=0.0)
+        s = 1.03
+        f = internal_forces(model, model.state(x0 * [s, 1.0, 1.0]))
+        e11 = 0.5 * (s * s - 1)
+        xs = [0.0] + [p[0] for p in curves.tensile_warp]
+        ys = [0.0] + [p[1] for p in curves.tensile_warp]
+        right = model.rest_uv[:, 0] > 0.1 - 1e-9
+        assert -f[right, 0].sum() == pytest.approx(s * np.interp(e11, xs, ys) * 0.10, rel=1e-9)
+
+
+def test_kawabata_curves_from_a_pattern_file():
+    from conftest import doc_with, rect_panel
+    from tailor.io import pattern_from_dict
+
+    kes = {"tensile_warp": [[1, 20], [3, 150]], "tensile_weft": [[2, 20]], "shear": [[5, 3]], "bending": [[1, 1e-5]]}
+    p = pattern_from_dict(doc_with({"a": rect_panel(10, 10)}, fabric={"preset": "bottino_a", "kawabata": kes}))
+    c = p.fabric.kawabata
+    assert c.tensile_warp == ((0.01, 20.0), (0.03, 150.0)) and c.shear[0][0] == pytest.approx(np.radians(5))
+    assert c.bending == ((100.0, 1e-5),)
+    bad = {**kes, "tensile_warp": [[3, 150], [1, 20]]}
+    from tailor.errors import PatternError
+
+    with pytest.raises(PatternError, match=r"fabric.kawabata: .*tensile_warp: deformations must increase"):
+        pattern_from_dict(doc_with({"a": rect_panel(10, 10)}, fabric={"kawabata": bad}), source="k.json")
