@@ -73,7 +73,8 @@ class Model:
         cylinders (Eq. 25).
     spring_vertices : (S, 2) int; spring_rest_length (S,) [m]; spring_stiffness (S,) [N/m];
     spring_damping : (S,) [N·s/m]
-        Walker's structural, shear and flexion springs (used when ``elastic == "springs"``).
+        Walker's structural, shear and flexion springs (used when ``elastic == "springs"``),
+        stiffness calibrated to the membrane's energy, dampers critical for the net's fastest mode.
     gravity : (3,) [m/s²]
     air_density : float [kg/m³]
         0 = vacuum (no drag, no wind).
@@ -216,6 +217,33 @@ def _max_slope(curve) -> float:
     return max((b - a) / (d - c) for a, b, c, d in zip(ys, ys[1:], xs, xs[1:]))
 
 
+def _calibrated_springs(uv, faces, face_panel, springs, ks, rest, area, face_stretch):
+    """Scale each panel's springs so the net stores the membrane's energy under uniform stretch.
+
+    Walker sets one spring strength by hand; here it follows from the fabric: a 1 % stretch of a
+    panel along x and along y costs the net what it costs Carignan's membrane (Eq. 22), so the
+    two elastic models hang alike.
+    """
+    ks = ks.copy()
+    vertex_panel = np.zeros(len(uv), np.intp)
+    vertex_panel[faces.reshape(-1)] = np.repeat(face_panel, 3)
+    spring_panel = vertex_panel[springs[:, 0]]
+    for pi in np.unique(face_panel):
+        sel = spring_panel == pi
+        faces_p = face_panel == pi
+        membrane = net = 0.0
+        for axis in (0, 1):
+            strained = uv.copy()
+            strained[:, axis] *= 1.01
+            length = np.linalg.norm(strained[springs[sel, 0]] - strained[springs[sel, 1]], axis=1)
+            net += 0.5 * np.dot(ks[sel], (length - rest[sel]) ** 2)
+            green = 0.5 * (1.01**2 - 1.0)
+            membrane += 0.5 * np.dot(face_stretch[faces_p], area[faces_p]) * green**2
+        if net > 0:
+            ks[sel] *= membrane / net
+    return ks
+
+
 def _calibrated_hinge_stiffness(uv, faces, hv, hf, base, rigidity, area, face_panel):
     """Hinge stiffness k = c·B|e|²/(A₀ + A₁), with c chosen per panel on its own rest mesh.
 
@@ -268,7 +296,9 @@ def build_model(
     fabric : Fabric or dict
         One fabric, or ``{panel index: Fabric}`` for every panel.
     elastic : {"membrane", "springs"}
-        Carignan's elastic surface (default) or Walker's mass-spring model.
+        Carignan's elastic surface (default) or Walker's mass-spring model. Springs on an
+        irregular triangulation are locally soft where triangles are thin (near boundaries): the
+        membrane is the accurate model, the net the classic fast one.
     gravity : (3,) [m/s²]
     air_density : float [kg/m³]
         0 (default) = vacuum; :data:`AIR_DENSITY` for air drag.
@@ -323,8 +353,15 @@ def build_model(
         curvature_scale = np.where(hinge_b > 0, np.sqrt(3.0 * hinge_k / np.maximum(hinge_b, 1e-300) / pair_area), 3.0 * np.sqrt(e_len2) / pair_area)
 
     springs, ks, rest = _walker_springs(uv, faces, hv, hf, np.maximum(k1, k2), rigidity)
-    m_pair = 0.5 * (mass[springs[:, 0]] + mass[springs[:, 1]])
-    kd = damping * np.sqrt(ks * m_pair)  # Eq. 26 for the relative motion of two masses: 2√(k·m/2)
+    ks = _calibrated_springs(uv, faces, fp, springs, ks, rest, area, k1)
+    # Gershgorin bound on the net's fastest frequency; Rayleigh dampers critical for it (Eq. 26)
+    # rows of M^-1/2·K·M^-1/2: Σ k·(1/m_v + 1/√(m_v·m_u)) over the springs at v
+    cross = ks / np.sqrt(mass[springs[:, 0]] * mass[springs[:, 1]])
+    row = np.bincount(springs[:, 0], ks / mass[springs[:, 0]] + cross, minlength=n) + np.bincount(
+        springs[:, 1], ks / mass[springs[:, 1]] + cross, minlength=n
+    )
+    omega_springs = float(np.sqrt(np.max(row, initial=0.0)))
+    kd = damping * 2.0 * ks / max(omega_springs, 1e-300)
 
     dm_inv = _grain_frame_dm_inv(uv, faces, np.asarray(mesh.face_grain, float))
     omega_face = element_frequencies(dm_inv, area, rho, *k_fast)
@@ -337,7 +374,8 @@ def build_model(
         for p in params
     )
     # never above the exact stability bound of symplectic Euler for the fastest damped mode
-    omega_max = float(np.sqrt(np.max(omega_face, initial=0.0) ** 2 + omega_bend**2))
+    omega_elastic = omega_springs if elastic == "springs" else float(np.max(omega_face, initial=0.0))
+    omega_max = float(np.sqrt(omega_elastic**2 + omega_bend**2))
     if omega_max > 0:
         dt = min(dt, 0.9 * symplectic_limit(damping) / omega_max)
     pin_mask = np.zeros(n, bool)

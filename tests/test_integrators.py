@@ -123,3 +123,15 @@ def test_stable_at_eq24_step_every_preset_5s(name, fabric):
 def test_unknown_integrator():
     with pytest.raises(ValueError, match="unknown integrator 'euler'; choose one of forward, symplectic"):
         make_integrator("euler")
+
+
+def test_walker_mass_spring_cloth_hangs_stably_near_the_membrane():
+    # Walker's net (structural, shear, flexion springs with dampers) calibrated to the membrane's
+    # energy: it hangs like it to within the crudeness of springs on an irregular mesh.
+    model, x0 = sheet(100, 100, 0.05, "cotton", elastic="springs")
+    model = model.with_pins(np.flatnonzero(x0[:, 2] > 1 - 1e-9))
+    bottom = np.flatnonzero(x0[:, 2] < 1e-9)
+    states = [s for _, s in simulate(model, model.state(x0), duration=2.0, frame_rate=10, integrator="symplectic")]
+    stretch = np.mean([-s.x[bottom, 2].mean() for s in states[-10:]])
+    assert np.isfinite(states[-1].x).all()
+    assert 0.01 * 0.7 < stretch < 0.01 * 1.6  # cotton: λ = 1 %
