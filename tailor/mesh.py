@@ -32,7 +32,7 @@ from shapely.geometry import Polygon
 
 from .curves import curve_length, loop_polyline, sample_curve
 from .errors import MeshingError
-from .geometry import face_angles, face_areas, face_signed_areas_2d
+from .geometry import face_angles, face_areas
 from .pattern import Pattern
 
 __all__ = ["GarmentMesh", "discretise", "DEFAULT_RESOLUTION", "MIN_ANGLE_DEG"]

@@ -131,7 +131,7 @@ def simulate(model, state, *, duration: float, frame_rate: float = 25.0, integra
 
 def run(model, state, **kwargs):
     """Run :func:`simulate` to the end and return the final State."""
-    last = state
-    for _, last in simulate(model, state, **kwargs):
-        pass
-    return last
+    final = state
+    for _, final in simulate(model, state, **kwargs):  # noqa: B007 - the loop keeps the last state
+        continue
+    return final

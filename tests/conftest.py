@@ -80,3 +80,19 @@ def sheet(width_cm: float, height_cm: float, resolution_m: float, fabric="cotton
     else:
         x0 = np.column_stack([uv, np.zeros(len(uv))])
     return model, x0
+
+
+def assert_minus_gradient(potential, forces, model, state, *, wrt="x", eps=1e-7, samples=6, seed=0):
+    """Check ``forces(model, state) == −∂potential/∂(state.<wrt>)`` by central differences."""
+    import numpy as np
+    import pytest
+
+    rng = np.random.default_rng(seed)
+    f = forces(model, state)
+    for i in rng.choice(model.vertex_count, samples, replace=False):
+        for k in range(3):
+            up, dn = state.copy(), state.copy()
+            getattr(up, wrt)[i, k] += eps
+            getattr(dn, wrt)[i, k] -= eps
+            numeric = -(potential(model, up) - potential(model, dn)) / (2 * eps)
+            assert f[i, k] == pytest.approx(numeric, rel=1e-5, abs=1e-8 * np.abs(f).max())

@@ -47,7 +47,7 @@ def test_seam_sides_pair_one_to_one_at_equal_arc_length(two_panel_doc):
     two_panel_doc["pattern"]["panels"]["back"] = rect_panel(30, 36)  # 10 % ease on the back sides
     pattern = pattern_from_dict(two_panel_doc)
     mesh = discretise(pattern, 0.015)
-    for si, seam in enumerate(pattern.seams):
+    for si in range(len(pattern.seams)):
         pairs = mesh.seam_pairs[mesh.seam_pair_seam == si]
         assert len(pairs) == 28  # the longer side's round(40 / 1.5) = 27 segments, on both sides
         ya, yb = mesh.uv[pairs[:, 0], 1], mesh.uv[pairs[:, 1], 1]

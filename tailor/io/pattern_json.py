@@ -225,7 +225,7 @@ def _loop(node: Node, scale: float, relative: bool, keys=None):
         if a == b:
             ep.fail(f"edge starts and ends at the same vertex {a}")
         ends.append((a, b))
-    for k, (a, b) in enumerate(ends):
+    for k, (_, b) in enumerate(ends):
         nxt = ends[(k + 1) % len(ends)]
         if b != nxt[0]:
             j = (k + 1) % len(ends)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from conftest import sheet
+from conftest import assert_minus_gradient, sheet
 from tailor.fabric import preset
 from tailor.forces import damping_forces, dissipation, stretch_energy, stretch_forces
 from tailor.forces.membrane import green_strain
@@ -43,31 +43,14 @@ def test_rigid_motion_no_force_no_dissipation(patch):
 
 def test_force_is_minus_energy_gradient(patch):
     model, x0 = patch
-    x = x0 + RNG.normal(0, 0.004, x0.shape)
-    state = model.state(x)
-    f = stretch_forces(model, state)
-    eps = 1e-7
-    for i in RNG.choice(model.vertex_count, 6, replace=False):
-        for k in range(3):
-            up, dn = state.copy(), state.copy()
-            up.x[i, k] += eps
-            dn.x[i, k] -= eps
-            numeric = -(stretch_energy(model, up) - stretch_energy(model, dn)) / (2 * eps)
-            assert f[i, k] == pytest.approx(numeric, rel=1e-5, abs=1e-9 * np.abs(f).max())
+    state = model.state(x0 + RNG.normal(0, 0.004, x0.shape))
+    assert_minus_gradient(stretch_energy, stretch_forces, model, state)
 
 
 def test_damping_is_minus_dissipation_gradient_in_velocity(patch):
     model, x0 = patch
     state = model.state(x0 + RNG.normal(0, 0.004, x0.shape), RNG.normal(0, 0.3, x0.shape))
-    f = damping_forces(model, state)
-    eps = 1e-6
-    for i in RNG.choice(model.vertex_count, 6, replace=False):
-        for k in range(3):
-            up, dn = state.copy(), state.copy()
-            up.v[i, k] += eps
-            dn.v[i, k] -= eps
-            numeric = -(dissipation(model, up) - dissipation(model, dn)) / (2 * eps)
-            assert f[i, k] == pytest.approx(numeric, rel=1e-5, abs=1e-9 * np.abs(f).max())
+    assert_minus_gradient(dissipation, damping_forces, model, state, wrt="v", eps=1e-6)
 
 
 @pytest.mark.parametrize("forces", [stretch_forces, damping_forces])

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from conftest import sheet
+from conftest import assert_minus_gradient, sheet
 from tailor.forces import spring_energy, spring_forces
 
 RNG = np.random.default_rng(5)
@@ -23,16 +23,7 @@ def test_no_duplicate_springs(net):
 
 def test_spring_force_is_minus_energy_gradient(net):
     model, x0 = net
-    state = model.state(x0 + RNG.normal(0, 0.005, x0.shape))
-    f = spring_forces(model, state)
-    eps = 1e-7
-    for i in RNG.choice(model.vertex_count, 5, replace=False):
-        for k in range(3):
-            up, dn = state.copy(), state.copy()
-            up.x[i, k] += eps
-            dn.x[i, k] -= eps
-            numeric = -(spring_energy(model, up) - spring_energy(model, dn)) / (2 * eps)
-            assert f[i, k] == pytest.approx(numeric, rel=1e-5, abs=1e-9 * np.abs(f).max())
+    assert_minus_gradient(spring_energy, spring_forces, model, model.state(x0 + RNG.normal(0, 0.005, x0.shape)))
 
 
 def test_dampers_ignore_rigid_motion(net):
