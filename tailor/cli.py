@@ -139,6 +139,52 @@ def _cmd_params(args) -> int:
     return 0
 
 
+def _read_body_args(args):
+    from .io.body_files import read_body
+
+    return read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base)
+
+
+def _cmd_body_info(args) -> int:
+    from .measure import find_landmarks
+
+    body = _read_body_args(args)
+    r = body.report
+    print(f"{args.body}: {r.get('vertices', body.frames.shape[1])} vertices, {r.get('faces', len(body.faces))} faces, "
+          f"{body.frame_count} frame(s) at {body.fps:g} fps")
+    if "units" in r:
+        print(f"  units {r['units']}, up axis {r['up']}, facing {r['facing']} -> metres, Z up, facing -Y")
+    print(f"  height {body.height * 100:.1f} cm")
+    marks = find_landmarks(body.vertices, body.faces)
+    print(f"  {'landmark':<16}{'height cm':>10}{'girth cm':>10}{'width cm':>10}{'depth cm':>10}")
+    for name, lm in marks.items():
+        print(f"  {name:<16}{lm.center[2] * 100:>10.1f}{lm.girth * 100:>10.1f}{lm.width * 100:>10.1f}{lm.depth * 100:>10.1f}")
+    return 0
+
+
+def _cmd_body_make(args) -> int:
+    from .io.body_files import make_bodies
+    from .mannequin import MEASUREMENT_PRESETS, with_measurements
+
+    base = MEASUREMENT_PRESETS[args.preset]
+    m = with_measurements(base, height=args.height, bust=args.bust, waist=args.waist, hips=args.hips,
+                          arm_length=args.arm_length, shoulder_width=args.shoulder_width, arm_angle=args.arm_angle)
+    rest, walk = make_bodies(args.out, m, frames=args.frames)
+    print(f"wrote {rest} and {walk} ({args.frames} frames, 1 s walk cycle)")
+    return 0
+
+
+def _cmd_body_render(args) -> int:
+    from .io.render import render_views
+
+    body = _read_body_args(args)
+    frame = min(max(args.frame, 0), body.frame_count - 1)
+    render_views(args.out, [(body.frames[frame], body.faces, (0.78, 0.78, 0.8))],
+                 title=f"{args.body} frame {frame}" if body.frame_count > 1 else str(args.body))
+    print(f"wrote {args.out}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``tailor`` command."""
     p = argparse.ArgumentParser(prog="tailor", description="Sewing patterns in, simulated garments out.")
@@ -167,6 +213,37 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--resolution", type=float, default=1.5, metavar="CM", help="element size (cm, default 1.5)")
     q.add_argument("--json", action="store_true", help="machine-readable output")
     q.set_defaults(func=_cmd_params)
+
+    b = sub.add_parser("body", help="bodies: information and landmarks, the mannequin, pictures")
+    bsub = b.add_subparsers(dest="body_command", required=True, metavar="ACTION")
+
+    def body_source(parser):
+        parser.add_argument("body", metavar="BODY", help="mesh file, frame folder, npz, PC2, or mannequin / mannequin-walk")
+        parser.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
+        parser.add_argument("--up", default="auto", choices=["auto", "x", "y", "z"])
+        parser.add_argument("--facing", default="auto", help="direction the body faces in its file: auto, -y, +z, ...")
+        parser.add_argument("--base", help="base mesh of a PC2 point cache")
+
+    bi = bsub.add_parser("info", help="units and axes detected, height, landmarks")
+    body_source(bi)
+    bi.set_defaults(func=_cmd_body_info)
+
+    from .mannequin import MEASUREMENT_PRESETS
+
+    bm = bsub.add_parser("make", help="generate the parametric mannequin and its walk cycle")
+    bm.add_argument("--preset", default="default", choices=list(MEASUREMENT_PRESETS))
+    for name in ("height", "bust", "waist", "hips", "arm-length", "shoulder-width"):
+        bm.add_argument(f"--{name}", type=float, metavar="CM")
+    bm.add_argument("--arm-angle", type=float, metavar="DEG", help="arms below horizontal (default 45.5)")
+    bm.add_argument("--frames", type=int, default=25, help="frames of the 1 s walk (25 fps)")
+    bm.add_argument("--out", default="bodies", metavar="DIR")
+    bm.set_defaults(func=_cmd_body_make)
+
+    br = bsub.add_parser("render", help="front and side views as a PNG")
+    body_source(br)
+    br.add_argument("--frame", type=int, default=0)
+    br.add_argument("--out", required=True, metavar="PNG")
+    br.set_defaults(func=_cmd_body_render)
     return p
 
 
