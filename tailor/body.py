@@ -110,17 +110,45 @@ def _rotation_to_z_up(up: int) -> np.ndarray:
     return np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 
 
-def _forward(vertices) -> np.ndarray:
-    """Horizontal unit direction the body faces: from the shins towards the toes."""
+def _foot_offsets(vertices):
+    """Horizontal offsets from each planted foot's ankle to the foot's centre (toes pull it forward)."""
     z = vertices[:, 2]
     h = np.ptp(z)
-    low = vertices[z < z.min() + 0.04 * h]
-    shin = vertices[(z > z.min() + 0.15 * h) & (z < z.min() + 0.25 * h)]
-    if len(low) < 3 or len(shin) < 3:
-        return np.array([0.0, -1.0, 0.0])
-    d = low[:, :2].mean(axis=0) - shin[:, :2].mean(axis=0)
-    if np.linalg.norm(d) < 0.01 * h:
-        return np.array([0.0, -1.0, 0.0])
+    low = vertices[z < z.min() + 0.03 * h][:, :2]
+    ankles = vertices[(z > z.min() + 0.05 * h) & (z < z.min() + 0.08 * h)][:, :2]
+    if len(low) < 6 or len(ankles) < 6:
+        return []
+    # two feet: split the floor slab across its widest gap-free direction (k-means, 2 clusters)
+    centres = low[[np.argmin(low[:, 0]), np.argmax(low[:, 0])]].astype(float)
+    for _ in range(10):
+        label = np.argmin(((low[:, None, :] - centres[None]) ** 2).sum(axis=2), axis=1)
+        centres = np.array([low[label == c].mean(axis=0) if np.any(label == c) else centres[c] for c in range(2)])
+    if np.linalg.norm(centres[0] - centres[1]) < 0.05 * h:  # one foot (or feet together)
+        centres = low.mean(axis=0, keepdims=True)
+        label = np.zeros(len(low), int)
+    out = []
+    for c, centre in enumerate(centres):
+        near = ankles[np.linalg.norm(ankles - centre, axis=1) < 0.08 * h]
+        if len(near) >= 3 and np.any(label == c):
+            out.append(low[label == c].mean(axis=0) - near.mean(axis=0))
+    return out
+
+
+def _forward(frames) -> np.ndarray:
+    """Horizontal unit axis the body faces: from each planted foot's ankle towards its toes.
+
+    Offsets of every planted foot in every frame are averaged (a lifted foot is not in the
+    floor slab), and the dominant horizontal axis with its sign is the facing.
+    """
+    offsets = []
+    for vertices in np.asarray(frames).reshape(-1, *np.shape(frames)[-2:]):
+        offsets.extend(_foot_offsets(vertices))
+    default = np.array([0.0, -1.0, 0.0])
+    if not offsets:
+        return default
+    d = np.mean(offsets, axis=0)
+    if np.linalg.norm(d) < 0.005 * np.ptp(np.asarray(frames)[..., 2]):
+        return default
     k = int(np.argmax(np.abs(d)))
     out = np.zeros(3)
     out[k] = np.sign(d[k])
@@ -167,7 +195,7 @@ def normalise_body(frames, faces, *, units: str = "auto", up: str = "auto", faci
     rot = _rotation_to_z_up(up_axis)
     out = np.einsum("ij,tnj->tni", rot, frames * scale)
     if facing == "auto":
-        fwd = _forward(out[0])
+        fwd = _forward(out)
         facing_name = "detected"
     else:
         sign = -1.0 if facing.startswith("-") else 1.0

@@ -353,6 +353,7 @@ def make_mannequin(measurements: Measurements | None = None, *, resolution: floa
         scale[0] = scale[1]
         scale[2] = 0.5 * (scale[1] + scale[3])
         scale[6] = scale[7] = scale[5]
+    verts[:, 2] -= verts[:, 2].min()  # smoothing rounds the soles a hair below the floor
     _, each = _field(verts, prims)
     weights = _skin_weights(verts, each, prims, m)
     return Mannequin(verts, faces, joints, weights, m)

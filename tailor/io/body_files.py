@@ -32,16 +32,17 @@ def _load_mesh(path: Path):
     import trimesh
 
     try:
-        mesh = trimesh.load(path, force="mesh", process=False)
+        loaded = trimesh.load(path, process=False)
     except Exception as exc:  # trimesh raises many types for bad files
         raise BodyError(f"{path.name}: cannot read the mesh: {exc}") from None
-    vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=float)
-    faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.intp)
-    if len(vertices) == 0:
-        raise BodyError(f"{path.name}: the mesh is empty (no vertices)")
-    if len(faces) == 0:
+    parts = list(loaded.geometry.values()) if isinstance(loaded, trimesh.Scene) else [loaded]
+    meshes = [p for p in parts if isinstance(p, trimesh.Trimesh) and len(p.faces)]
+    if meshes:
+        mesh = meshes[0] if len(meshes) == 1 else trimesh.util.concatenate(meshes)
+        return np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.intp)
+    if any(len(getattr(p, "vertices", ())) for p in parts):
         raise BodyError(f"{path.name}: the mesh has no faces (a point cloud cannot be a body)")
-    return vertices, faces
+    raise BodyError(f"{path.name}: the mesh is empty (no vertices)")
 
 
 def read_pc2(path, vertex_count: int | None = None) -> np.ndarray:
