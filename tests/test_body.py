@@ -132,3 +132,14 @@ def test_facing_of_every_walk_frame_alone(turn):
     expected = rot @ [0.0, -1.0, 0.0]
     for frame in walk.frames:
         assert _forward((frame @ rot.T)[None]) == pytest.approx(expected, abs=1e-9)
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".stl", ".off", ".glb"])
+def test_common_mesh_formats(tmp_path, mannequin, reference, suffix):
+    import trimesh
+
+    f = tmp_path / f"body{suffix}"
+    trimesh.Trimesh(garmentcode_frame(mannequin.vertices) * 100.0, mannequin.faces, process=False).export(f)
+    body = read_body(f)
+    assert body.report["units"] == "cm" and body.report["up"] == "y"
+    assert find_landmarks(body.vertices, body.faces)["waist"].girth == pytest.approx(reference["waist"].girth, abs=0.003)
