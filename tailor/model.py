@@ -217,6 +217,32 @@ def _max_slope(curve) -> float:
     return max((b - a) / (d - c) for a, b, c, d in zip(ys, ys[1:], xs, xs[1:]))
 
 
+def _welded(weld, uv, faces, face_panel, mass, area, rigidity, factor, springs, ks, rest, kd):
+    """Topology, masses, hinges and springs of the garment with welded vertices."""
+    n = int(weld.max()) + 1
+    faces_w = weld[faces]
+    mass_w = np.bincount(weld, mass, minlength=n)
+    first = np.full(n, -1, np.intp)
+    first[weld[::-1]] = np.arange(len(weld))[::-1]
+    uv_w = uv[first]
+    hv, hf = hinges(faces_w)
+    f0 = hf[:, 0]
+    c0 = np.argmax(faces_w[f0] == hv[:, :1], axis=1)
+    c1 = np.argmax(faces_w[f0] == hv[:, 1:2], axis=1)
+    e_len2 = np.sum((uv[faces[f0, c0]] - uv[faces[f0, c1]]) ** 2, axis=1)  # rest length in its own panel
+    pair_area = area[hf[:, 0]] + area[hf[:, 1]]
+    hinge_b = 0.5 * (rigidity[hf[:, 0]] + rigidity[hf[:, 1]])
+    hinge_k = factor[face_panel[f0]] * hinge_b * e_len2 / pair_area
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(hinge_b > 0, np.sqrt(3.0 * hinge_k / np.maximum(hinge_b, 1e-300) / pair_area), 3.0 * np.sqrt(e_len2) / pair_area)
+    sp = weld[springs]
+    keep = sp[:, 0] != sp[:, 1]
+    sp, ks, rest, kd = sp[keep], ks[keep], rest[keep], kd[keep]
+    sp = np.sort(sp, axis=1)
+    _, unique = np.unique(sp, axis=0, return_index=True)
+    return faces_w, uv_w, mass_w, hv, hf, hinge_k, scale, sp[unique], ks[unique], rest[unique], kd[unique]
+
+
 def _calibrated_springs(uv, faces, face_panel, springs, ks, rest, area, face_stretch):
     """Scale each panel's springs so the net stores the membrane's energy under uniform stretch.
 
@@ -286,6 +312,7 @@ def build_model(
     damping: float = 1.0,
     safety: float = SAFETY,
     pinned=None,
+    weld=None,
 ) -> Model:
     """Build the fixed simulation model of a discretised garment.
 
@@ -307,6 +334,10 @@ def build_model(
     safety : float
         Eq. 24's l.
     pinned : bool mask or indices, optional
+    weld : (N,) int, optional
+        Index of each mesh vertex in a welded garment (sewn seams: Carignan Eq. 16–18). Welded
+        vertices are one particle with the summed mass; each triangle keeps its panel's rest shape,
+        and triangles that now meet across a seam get bending hinges there too.
 
     Returns
     -------
@@ -378,14 +409,27 @@ def build_model(
     omega_max = float(np.sqrt(omega_elastic**2 + omega_bend**2))
     if omega_max > 0:
         dt = min(dt, 0.9 * symplectic_limit(damping) / omega_max)
+    faces_out, uv_out, mass_out = faces, uv, mass
+    if weld is not None:
+        weld = np.asarray(weld, np.intp)
+        factor = np.ones(panel_count)
+        base = hinge_b * e_len2 / (area[hf[:, 0]] + area[hf[:, 1]])
+        for pi in range(panel_count):
+            sel = (fp[hf[:, 0]] == pi) & (base > 0)
+            if sel.any():
+                factor[pi] = float(np.median(hinge_k[sel] / base[sel]))
+        faces_out, uv_out, mass_out, hv, hf, hinge_k, curvature_scale, springs, ks, rest, kd = _welded(
+            weld, uv, faces, fp, mass, area, rigidity, factor, springs, ks, rest, kd
+        )
+        n = len(mass_out)
     pin_mask = np.zeros(n, bool)
     if pinned is not None:
         pin_mask[np.asarray(pinned)] = True
     return Model(
-        rest_uv=_frozen(uv),
-        faces=_frozen(faces),
+        rest_uv=_frozen(uv_out),
+        faces=_frozen(faces_out),
         face_panel=_frozen(fp),
-        vertex_mass=_frozen(mass),
+        vertex_mass=_frozen(mass_out),
         vertex_pinned=_frozen(pin_mask),
         face_rest_area=_frozen(area),
         face_dm_inv=_frozen(dm_inv),

@@ -1,0 +1,268 @@
+"""The main job: place, sew and drape a garment on a (moving) body (Carignan §3–4).
+
+:func:`drape` runs three phases:
+
+1. **sewing** — body still, gravity off (GarmentCode's zero-gravity warm-up), seaming forces
+   (Eq. 15) pull the placed panels together and pairs merge (Eq. 16–18) until every seam is
+   closed, or a time-out raises :class:`~tailor.errors.SimulationError` naming the open seams;
+2. **settling** — gravity on, attachments hold (Eq. 19–20), the garment comes to rest;
+3. **motion** — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
+
+Body contact (Eq. 9–14) acts in every phase through :class:`~tailor.collide.BodyCollider`.
+Nothing here writes files: frames go to the caller (``on_frame``) and into the result.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .collide import BodyCollider
+from .errors import SimulationError
+from .fabric import Fabric, preset
+from .forces import total_forces
+from .measure import find_landmarks
+from .mesh import DEFAULT_RESOLUTION, discretise
+from .model import AIR_DENSITY, build_model
+from .placement import place_panels
+from .integrators import make_integrator
+from .seams import Sewing, merge_state
+from .sim import simulate
+
+__all__ = ["drape", "DrapeResult"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class DrapeResult:
+    """Frames of a drape and everything needed to write them.
+
+    Attributes
+    ----------
+    frames : list of (N, 3) arrays [m]
+        Garment vertex positions, frame 0 = dressed and settled.
+    body_frames : list of (M, 3) arrays [m]
+        The body at the same instants.
+    mesh : GarmentMesh
+    weld : (N,) int
+        Index of each vertex in the welded garment (merged seam vertices share one).
+    report : dict
+        Inputs, derived parameters, steps and wall time per phase, seam gaps, penetration.
+    """
+
+    frames: list
+    body_frames: list
+    mesh: object
+    weld: np.ndarray
+    body_faces: np.ndarray
+    pattern: object
+    report: dict = field(default_factory=dict)
+
+
+def _attachment_vertices(pattern, mesh, attachment):
+    pi = pattern.panel_index(attachment.panel)
+    if attachment.vertex is not None:
+        panel = pattern.panels[pi]
+        edge = next(k for k, e in enumerate(panel.edges) if e.endpoints[0] == attachment.vertex)
+        return mesh.edge_vertices[(pi, None, edge)][:1]
+    ids = mesh.edge_vertices[(pi, attachment.hole, attachment.edge)]
+    t = np.linspace(0.0, 1.0, len(ids))
+    lo, hi = min(attachment.start, attachment.end), max(attachment.start, attachment.end)
+    return ids[(t >= lo - 1e-9) & (t <= hi + 1e-9)]
+
+
+class _Attachments:
+    """Vertices held to body points (barycentric on a body triangle, offset along its normal)."""
+
+    def __init__(self, ids, tri, bary, offset, faces):
+        self.ids, self.tri, self.bary, self.offset, self.faces = ids, tri, bary, offset, faces
+
+    def apply(self, state, body_x, body_v):
+        f = self.faces[self.tri]
+        p = (body_x[f] * self.bary[:, :, None]).sum(axis=1)
+        a, b, c = body_x[f[:, 0]], body_x[f[:, 1]], body_x[f[:, 2]]
+        n = np.cross(b - a, c - a)
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        state.x[self.ids] = p + self.offset[:, None] * n
+        state.v[self.ids] = (body_v[f] * self.bary[:, :, None]).sum(axis=1)
+
+
+def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DEFAULT_RESOLUTION,
+          integrator: str = "implicit", sew_timeout: float = 4.0, settle: float = 1.0, record_sewing: bool = False,
+          on_frame=None, progress=None) -> DrapeResult:
+    """Dress ``body`` in ``pattern`` and animate it.
+
+    Parameters
+    ----------
+    pattern : Pattern
+    body : Body
+        Static or moving (:func:`tailor.io.body_files.read_body`).
+    fabric : Fabric or str, optional
+        Overrides the pattern's fabric (panels with their own keep theirs).
+    frames : int
+        Frames to produce after the garment is dressed (frame 0 included).
+    resolution : float
+        Mesh edge length [m].
+    record_sewing : bool
+        Also return the sewing and settling as frames (before frame 0).
+    on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
+    progress : callable ``progress(phase, done, total)``, optional
+
+    Raises
+    ------
+    SimulationError
+        Seams that do not close within ``sew_timeout`` seconds; SimulationUnstable from the guard.
+    """
+    t_start = time.perf_counter()
+    if isinstance(fabric, str):
+        fabric = preset(fabric)
+    base = fabric if isinstance(fabric, Fabric) else pattern.fabric
+    fabrics = {i: (p.fabric or base) for i, p in enumerate(pattern.panels)}
+    mesh = discretise(pattern, resolution)
+    n = mesh.vertex_count
+    landmarks = find_landmarks(body.vertices, body.faces)
+    x0 = place_panels(pattern, mesh, landmarks)
+    thickness = max(f.thickness for f in fabrics.values()) + 0.002
+    unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY)
+    mass = np.asarray(unwelded.vertex_mass)
+    friction_of = np.array([fabrics[p].friction for p in mesh.vertex_panel])
+    sewing = Sewing(mesh.seam_pairs, merge_distance=max(0.3 * resolution, 0.002))
+    collider = BodyCollider(body.frames, body.faces, margin=max(0.02, 2 * thickness))
+    integ = make_integrator(integrator)
+    report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution,
+              "integrator": integrator, "time_step_eq24_s": unwelded.time_step, "phases": {}, "seam_pairs": len(sewing.pairs),
+              "fabrics": {p.name: fabrics[i].name for i, p in enumerate(pattern.panels)},
+              "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
+              "active": {"bending": unwelded.has_bending, "air": True, "body_collision": True, "self_collision": False}}
+    sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp),
+           "attach": None, "motion_start": None, "rebuilds": 0}
+
+    def rebuild(state_x, state_v):
+        """Weld the merged pairs into one particle each and carry the state over (Eq. 17–18)."""
+        old = sim["weld"]
+        x_orig, v_orig = state_x[old], state_v[old]
+        new = sewing.weld_map(n)
+        xw, vw = merge_state(x_orig, v_orig, mass, new)
+        m = build_model(mesh, fabrics, air_density=AIR_DENSITY, weld=new,
+                        gravity=(0.0, 0.0, -9.80665) if sim["gravity"] else (0.0, 0.0, 0.0))
+        if len(sim["pins"]):
+            m = m.with_pins(np.unique(new[sim["pins"]]))
+        sim["weld"], sim["model"] = new, m
+        sim["rebuilds"] += 1
+        return m.state(xw, vw, 0.0)
+
+    def body_state(t):
+        start = sim["motion_start"]
+        if start is None or body.frame_count == 1:
+            return body.frames[0], np.zeros_like(body.frames[0]), 0
+        tb = max(0.0, t - start)
+        bx, bv = body.at(tb)
+        return bx, bv, int(round(tb * body.fps)) % body.frame_count
+
+    deepest = [0.0]
+
+    def hook(model_, state, dt):
+        bx, bv, k = body_state(state.t)
+        if sim["attach"] is not None:
+            sim["attach"].apply(state, bx, bv)
+        friction = friction_of[np.unique(sim["weld"], return_index=True)[1]]
+        deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness, friction=friction))
+
+    def forces(model_, state):
+        return sewing.forces(model_, state, sim["weld"], total_forces(model_, state))
+
+    def advance(state, duration):
+        """Simulate ``duration`` seconds on the current welded model; return the final state."""
+        t = state.t
+        last = state
+        for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
+                                hooks=[hook], forces=forces):
+            continue
+        last.t = t + duration
+        return last
+
+    out_frames, body_frames = [], []
+
+    def emit(state, bx):
+        x = state.x[sim["weld"]]
+        if on_frame is not None:
+            on_frame(len(out_frames), x, bx)
+        out_frames.append(x.copy())
+        body_frames.append(bx.copy())
+
+    frame_dt = 1.0 / fps
+    # 1. sewing, gravity off: one frame at a time, welding what closed
+    t0 = time.perf_counter()
+    sim["model"] = replace(unwelded, gravity=np.zeros(3))
+    state = sim["model"].state(x0)
+    sew_frames = 0
+    t = 0.0
+    while sewing.open_count and t < sew_timeout:
+        state = advance(state, frame_dt)
+        t += frame_dt
+        sew_frames += 1
+        if sewing.close(state.x[sim["weld"]]):
+            state = rebuild(state.x, state.v)
+            state.t = t
+        if record_sewing:
+            emit(state, body.frames[0])
+        if progress:
+            progress("sewing", len(sewing.pairs) - sewing.open_count, len(sewing.pairs))
+    if sewing.open_count:
+        gaps = np.where(sewing.merged, 0.0, sewing.gaps(state.x[sim["weld"]]))
+        w = int(np.argmax(gaps))
+        i, j = sewing.pairs[w]
+        raise SimulationError(
+            f"{pattern.source}: {sewing.open_count} of {len(sewing.pairs)} seam vertex pairs are still open after "
+            f"{sew_timeout:g} s of sewing (widest gap {gaps[w] * 100:.1f} cm, between panels "
+            f"{mesh.panel_names[mesh.vertex_panel[i]]} and {mesh.panel_names[mesh.vertex_panel[j]]}); "
+            f"check the stitches and placements, or allow more time (--sew-timeout)"
+        )
+    report["phases"]["sewing"] = {"simulated_s": t, "frames": sew_frames, "wall_s": time.perf_counter() - t0,
+                                  "max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": sim["rebuilds"]}
+    # 2. attachments, then settling under gravity
+    t0 = time.perf_counter()
+    held = [_attachment_vertices(pattern, mesh, a) for a in pattern.attachments]
+    sim["gravity"] = True
+    if held:
+        ids = np.unique(np.concatenate(held))
+        dist, tri, bary, _ = collider.nearest(state.x[sim["weld"][ids]], body.frames[0], 0, cache=False)
+        ok = tri >= 0
+        sim["pins"] = ids[ok]
+    state = rebuild(state.x, state.v)
+    state.t = t
+    if len(sim["pins"]):
+        wid = sim["weld"][sim["pins"]]
+        wid, first = np.unique(wid, return_index=True)
+        sim["attach"] = _Attachments(wid, tri[ok][first], bary[ok][first],
+                                     np.maximum(dist[ok][first], thickness), collider.faces)
+    for _ in range(int(round(settle * fps))):
+        state = advance(state, frame_dt)
+        if record_sewing:
+            emit(state, body.frames[0])
+    report["phases"]["settling"] = {"simulated_s": settle, "wall_s": time.perf_counter() - t0}
+    # 3. motion, one frame every 1/fps
+    t0 = time.perf_counter()
+    sim["motion_start"] = state.t
+    penetration = []
+    for f in range(frames):
+        if f:
+            state = advance(state, frame_dt)
+        bx, _, k = body_state(state.t)
+        dist, tri, _, _ = collider.nearest(state.x, bx, k)
+        inside = dist[tri >= 0]
+        penetration.append(float(max(0.0, -inside.min())) if len(inside) else 0.0)
+        emit(state, bx)
+        if progress:
+            progress("motion", f + 1, frames)
+    report["phases"]["motion"] = {"simulated_s": (frames - 1) / fps, "frames": frames, "wall_s": time.perf_counter() - t0}
+    report["max_penetration_m_per_frame"] = penetration
+    report["max_penetration_m"] = max(penetration) if penetration else 0.0
+    report["wall_s"] = time.perf_counter() - t_start
+    report["body_bvh_queries"] = collider.queries
+    report["welded_vertices"] = int(sim["model"].vertex_count)
+    return DrapeResult(out_frames, body_frames, mesh, sim["weld"], body.faces, pattern, report)

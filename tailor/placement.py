@@ -1,0 +1,112 @@
+"""Placing panels around a body before sewing (Carignan §4: "panels are placed around the body").
+
+Two kinds of placement come from the pattern:
+
+* an explicit rigid transform (GarmentCode's ``translation``/``rotation``), applied as it is;
+* a body-relative :class:`~tailor.pattern.LandmarkPlacement`: the panel is rolled around the
+  named landmark's cross-section (an ellipse for the trunk, a circle for a limb) at ``clearance``
+  from the body, its anchor at the landmark's ``angle``, its +y along the landmark's axis and its
+  outside facing out. A row of the panel wider than its share of the circumference (a flared
+  skirt) is rolled on a wider circle instead, so panels never overlap: with n panels at one
+  landmark, each may span at most 360°/n.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import PatternError
+from .pattern import LandmarkPlacement, TransformPlacement
+
+__all__ = ["place_panels"]
+
+
+def _frame(landmark):
+    """Unit axis (panel +y), 'front' and 'left' directions in the plane of the cut."""
+    axis = np.asarray(landmark.axis, float)
+    axis = axis / np.linalg.norm(axis)
+    front = np.array([0.0, -1.0, 0.0]) - axis * (-axis[1])
+    if np.linalg.norm(front) < 1e-6:
+        front = np.array([0.0, 0.0, -1.0]) - axis * (-axis[2])
+    front /= np.linalg.norm(front)
+    left = np.cross(axis, front)  # seen from outside at the front, +x runs towards the body's left (+X)
+    if left @ np.array([1.0, 0.0, 0.0]) < 0 and abs(axis[2]) > 0.9:
+        left = -left
+    return axis, front, left
+
+
+def _wrap(uv, anchor, lm, placement, share):
+    axis, front, left = _frame(lm)
+    is_trunk = abs(axis[2]) > 0.9 and lm.width > 0 and lm.depth > 0
+    if is_trunk:
+        a0, b0 = 0.5 * lm.width, 0.5 * lm.depth
+    else:
+        a0 = b0 = lm.girth / (2.0 * math.pi)
+    clearance = placement.clearance
+    rel = uv - anchor
+    a, b = a0 + clearance, b0 + clearance
+    perimeter = math.pi * (3 * (a + b) - math.sqrt((3 * a + b) * (a + 3 * b)))
+    # width of the panel along its height (1 cm bands), never narrower than nearer the anchor
+    lo, hi = rel[:, 1].min(), rel[:, 1].max()
+    edges = np.arange(lo, hi + 0.01, 0.01)
+    band = np.clip(np.searchsorted(edges, rel[:, 1]) - 1, 0, max(len(edges) - 2, 0))
+    width = np.zeros(max(len(edges) - 1, 1))
+    np.maximum.at(width, band, 0.0)
+    for k in range(len(width)):
+        members = rel[band == k, 0]
+        width[k] = np.ptp(members) if len(members) > 1 else 0.0
+    centre = np.argmin(np.abs(0.5 * (edges[:-1] + edges[1:]))) if len(edges) > 1 else 0
+    width[centre:] = np.maximum.accumulate(width[centre:])
+    width[: centre + 1] = np.maximum.accumulate(width[: centre + 1][::-1])[::-1]
+    grow = np.maximum(1.0, width / max(share, 1e-6) * 1.05 / perimeter)[band]
+    # arc length → angle on the ellipse (scaled per band), from the anchor's azimuth
+    phi = np.linspace(0.0, 2.0 * math.pi, 721)
+    unit = np.column_stack([a * np.sin(phi), b * np.cos(phi)])
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(unit, axis=0).T))])
+    s0 = np.interp(placement.angle % (2.0 * math.pi), phi, arc)
+    ang = np.interp((s0 + rel[:, 0] / grow) % arc[-1], arc, phi)
+    radial = np.outer(grow * a * np.sin(ang), left) + np.outer(grow * b * np.cos(ang), front)
+    height = rel[:, 1] + placement.offset
+    return np.asarray(lm.center) + radial + np.outer(height, axis)
+
+
+def place_panels(pattern, mesh, landmarks=None) -> np.ndarray:
+    """Initial 3D positions [m], shape (N, 3), of every mesh vertex from its panel's placement.
+
+    Parameters
+    ----------
+    pattern : Pattern
+    mesh : GarmentMesh
+    landmarks : dict of name → Landmark, optional
+        Needed by body-relative placements (:func:`tailor.measure.find_landmarks`).
+
+    Raises
+    ------
+    PatternError
+        A panel without a placement, or a landmark placement without a body.
+    """
+    x = np.zeros((mesh.vertex_count, 3))
+    counts: dict = {}
+    for p in pattern.panels:
+        if isinstance(p.placement, LandmarkPlacement):
+            counts[p.placement.landmark] = counts.get(p.placement.landmark, 0) + 1
+    for pi, panel in enumerate(pattern.panels):
+        ids = mesh.panel_vertices(pi)
+        uv = mesh.uv[ids]
+        pl = panel.placement
+        if pl is None:
+            pattern.fail(panel.where(), "the panel has no placement (give 'placement' or 'translation'/'rotation')")
+        if isinstance(pl, TransformPlacement):
+            x[ids] = pl.apply(uv)
+            continue
+        if landmarks is None:
+            raise PatternError(f"{pattern.source}: {panel.where()}.placement: a landmark placement needs a body")
+        name = "bust" if pl.landmark == "chest" else pl.landmark
+        lm = landmarks.get(name) or landmarks.get(pl.landmark)
+        lo, hi = uv.min(axis=0), uv.max(axis=0)
+        anchor = np.array(pl.anchor) if pl.anchor is not None else np.array([0.5 * (lo[0] + hi[0]), hi[1]])
+        share = 1.0 / counts[pl.landmark]
+        x[ids] = _wrap(uv, anchor, lm, pl, share)
+    return x
