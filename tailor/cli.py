@@ -185,6 +185,45 @@ def _cmd_body_render(args) -> int:
     return 0
 
 
+def _cmd_drape(args) -> int:
+    from .drape import drape
+    from .io import read_pattern
+    from .io.body_files import read_body
+    from .io.garment import write_drape
+
+    pattern = read_pattern(args.pattern)
+    out = Path(args.out) if args.out else Path("out") / pattern.name
+    if out.exists() and not args.overwrite:
+        from .errors import TailorError
+
+        raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
+    body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base)
+    fabric = None
+    if args.fabric:
+        from .fabric import preset
+
+        fabric = preset(args.fabric)
+    quiet = args.quiet
+
+    def progress(phase, done, total):
+        if not quiet:
+            print(f"\r  {phase:<8} {done}/{total}", end="", file=sys.stderr, flush=True)
+
+    t0 = time.perf_counter()
+    result = drape(pattern, body, fabric, frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2,
+                   integrator=args.integrator, sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
+                   progress=progress)
+    if not quiet:
+        print(file=sys.stderr)
+    write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
+    r = result.report
+    print(f"{pattern.source} on {args.body}: {r['vertices']} vertices ({r['welded_vertices']} after sewing), "
+          f"{len(result.frames)} frames, max penetration {r['max_penetration_m'] * 1000:.1f} mm, "
+          f"seam gap at merge {r['phases']['sewing']['max_gap_at_merge_m'] * 1000:.1f} mm, "
+          f"{time.perf_counter() - t0:.1f} s -> {out}/")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``tailor`` command."""
     p = argparse.ArgumentParser(prog="tailor", description="Sewing patterns in, simulated garments out.")
@@ -244,6 +283,27 @@ def build_parser() -> argparse.ArgumentParser:
     br.add_argument("--frame", type=int, default=0)
     br.add_argument("--out", required=True, metavar="PNG")
     br.set_defaults(func=_cmd_body_render)
+
+    from .integrators import INTEGRATORS
+
+    d = sub.add_parser("drape", help="place, sew and drape a pattern on a body; writes an OBJ per frame")
+    d.add_argument("pattern", metavar="PATTERN")
+    d.add_argument("--body", default="mannequin", help="mannequin (default), mannequin-walk, or a body file/folder")
+    d.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
+    d.add_argument("--up", default="auto", choices=["auto", "x", "y", "z"])
+    d.add_argument("--facing", default="auto")
+    d.add_argument("--base", help="base mesh of a PC2 body")
+    d.add_argument("--fabric", choices=fabric_names(), help="override the pattern's fabric")
+    d.add_argument("--frames", type=int, default=25, help="frames after dressing (default 25)")
+    d.add_argument("--fps", type=float, default=25.0)
+    d.add_argument("--resolution", type=float, default=2.0, metavar="CM", help="mesh edge length (cm, default 2)")
+    d.add_argument("--integrator", default="implicit", choices=list(INTEGRATORS))
+    d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
+    d.add_argument("--record-sewing", action="store_true", help="also write the sewing and settling frames")
+    d.add_argument("--with-body", action="store_true", help="also write the body of every frame")
+    d.add_argument("--out", metavar="DIR", help="output folder (default out/<pattern name>)")
+    d.add_argument("--overwrite", action="store_true", help="replace an existing output folder")
+    d.set_defaults(func=_cmd_drape)
     return p
 
 

@@ -195,7 +195,9 @@ class BodyCollider:
         Returns the deepest penetration [m] found before the response (0 if none).
         """
         dist, tri, bary, normal = self.nearest(state.x, body_x, frame)
-        hit = np.flatnonzero((tri >= 0) & (dist < thickness))
+        # deeper than half the margin cannot have happened within one step: the closest triangle is
+        # on the far side of a thin or concave part (armpit, crotch), so leave those alone
+        hit = np.flatnonzero((tri >= 0) & (dist < thickness) & (dist > -0.5 * self.margin))
         if not len(hit):
             return 0.0
         depth = float(max(0.0, -dist[hit].min()))

@@ -30,7 +30,7 @@ from .model import AIR_DENSITY, build_model
 from .placement import place_panels
 from .integrators import make_integrator
 from .seams import Sewing, merge_state
-from .sim import simulate
+from .sim import Guard, simulate
 
 __all__ = ["drape", "DrapeResult"]
 
@@ -131,7 +131,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     mass = np.asarray(unwelded.vertex_mass)
     friction_of = np.array([fabrics[p].friction for p in mesh.vertex_panel])
     sewing = Sewing(mesh.seam_pairs, merge_distance=max(0.3 * resolution, 0.002))
-    collider = BodyCollider(body.frames, body.faces, margin=max(0.02, 2 * thickness))
+    collider = BodyCollider(body.frames, body.faces, margin=max(0.03, 2 * thickness))
     integ = make_integrator(integrator)
     report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution,
               "integrator": integrator, "time_step_eq24_s": unwelded.time_step, "phases": {}, "seam_pairs": len(sewing.pairs),
@@ -179,8 +179,11 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         """Simulate ``duration`` seconds on the current welded model; return the final state."""
         t = state.t
         last = state
+        # sewing is assembly, not physics: corners pulled three ways may stretch far until merged
+        # and relaxed, so the guard is looser until the body starts moving
+        guard = Guard(max_stretch=6.0) if sim["motion_start"] is None else Guard()
         for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
-                                hooks=[hook], forces=forces):
+                                hooks=[hook], forces=forces, guard=guard):
             continue
         last.t = t + duration
         return last

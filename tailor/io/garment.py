@@ -1,0 +1,86 @@
+"""Writing a drape: an OBJ per frame (welded seams, per-panel UVs and groups), a material file,
+optionally the body, and ``report.json`` — all into a fresh folder that appears only when complete.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import TailorError
+from .atomic import write_text_atomic
+from .obj import obj_text
+
+__all__ = ["write_drape"]
+
+_COLOURS = [(0.80, 0.25, 0.25), (0.25, 0.45, 0.85), (0.30, 0.70, 0.35), (0.90, 0.75, 0.20),
+            (0.65, 0.30, 0.75), (0.20, 0.75, 0.75), (0.95, 0.55, 0.25), (0.55, 0.55, 0.55)]
+
+
+def _welded(result, x):
+    """Welded positions (one per merged group) and faces in welded indices."""
+    weld = result.weld
+    n = int(weld.max()) + 1
+    first = np.full(n, -1, np.intp)
+    first[weld[::-1]] = np.arange(len(weld))[::-1]
+    return x[first], weld[result.mesh.faces]
+
+
+def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = False) -> Path:
+    """Write ``result`` (:class:`tailor.drape.DrapeResult`) into ``out_dir``.
+
+    Files: ``garment_0000.obj`` … (``v`` welded so a seam is one vertex, ``vt`` the flat pattern in
+    metres, one ``g`` per panel), ``garment.mtl``, optionally ``body_0000.obj`` …, and
+    ``report.json``. Everything is written into a temporary folder beside ``out_dir`` and renamed
+    into place at the end; an existing ``out_dir`` is refused unless ``overwrite``.
+    """
+    out = Path(out_dir)
+    if out.exists() and not overwrite:
+        raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        mesh = result.mesh
+        names = mesh.panel_names
+        mtl = "".join(f"newmtl {name}\nKd {r:.3f} {g:.3f} {b:.3f}\n\n" for name, (r, g, b) in
+                      zip(names, (_COLOURS[i % len(_COLOURS)] for i in range(len(names)))))
+        (tmp / "garment.mtl").write_text(mtl)
+        for k, x in enumerate(result.frames):
+            xw, faces = _welded(result, x)
+            text = obj_text(xw, faces, uv=mesh.uv, face_uv=mesh.faces, face_group=mesh.face_panel, group_names=names,
+                            mtl="garment.mtl", header=f"tailor drape of {result.pattern.name}, frame {k}")
+            (tmp / f"garment_{k:04d}.obj").write_text(text)
+            if with_body:
+                (tmp / f"body_{k:04d}.obj").write_text(obj_text(result.body_frames[k], result.body_faces))
+        report = dict(result.report)
+        report["pattern"] = result.pattern.source
+        report["frames_written"] = len(result.frames)
+        (tmp / "report.json").write_text(json.dumps(report, indent=2, default=_jsonable))
+        if out.exists():
+            trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=out.parent))
+            out.rename(trash / out.name)
+            tmp.rename(out)
+            shutil.rmtree(trash, ignore_errors=True)
+        else:
+            tmp.rename(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return out
+
+
+def _jsonable(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        return value.item()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def write_report(path, report: dict) -> None:
+    """Write a report dict as JSON atomically."""
+    write_text_atomic(path, json.dumps(report, indent=2, default=_jsonable))
