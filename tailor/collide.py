@@ -13,11 +13,15 @@ import fcl
 import numpy as np
 from numba import njit
 
+from .errors import SimulationUnstable
+
 __all__ = ["bvh_object", "self_intersections", "BodyCollider"]
 
 
 def bvh_object(vertices, faces):
-    """An FCL collision object over a triangle mesh (identity transform)."""
+    """An FCL collision object over a triangle mesh (identity transform).
+
+    """
     model = fcl.BVHModel()
     model.beginModel(len(vertices), len(faces))
     model.addSubModel(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32))
@@ -144,6 +148,9 @@ class BodyCollider:
         With ``cache`` the answer is reused while the same points stay within half the margin of
         where they were asked about, on the same body frame.
         """
+        if not np.all(np.isfinite(x)):  # FCL would crash on NaN; the guard reports instabilities
+            raise SimulationUnstable("cloth positions became NaN or infinite before the body collision query; "
+                                     "try a smaller time step or the implicit integrator")
         c = self._cache
         if cache and c is not None and c[0] == frame and c[1].shape == x.shape and np.max(np.abs(x - c[1])) < 0.5 * self.margin:
             return c[2], c[3]
@@ -197,7 +204,8 @@ class BodyCollider:
         dist, tri, bary, normal = self.nearest(state.x, body_x, frame)
         # deeper than half the margin cannot have happened within one step: the closest triangle is
         # on the far side of a thin or concave part (armpit, crotch), so leave those alone
-        hit = np.flatnonzero((tri >= 0) & (dist < thickness) & (dist > -0.5 * self.margin))
+        # a resting band above the thickness keeps resting contact from flickering on and off
+        hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & (dist > -0.5 * self.margin))
         if not len(hit):
             return 0.0
         depth = float(max(0.0, -dist[hit].min()))
@@ -207,17 +215,20 @@ class BodyCollider:
         n = normal[hit]
         movable = ~model.vertex_pinned[hit]
         hit, n, vb = hit[movable], n[movable], vb[movable]
-        push = (thickness - dist[hit])[:, None] * n
+        push = np.maximum(thickness - dist[hit], 0.0)[:, None] * n
         state.x[hit] += push
         rel = state.v[hit] - vb  # Eq. 9
         vn = np.einsum("ij,ij->i", rel, n)  # Eq. 10
         approach = np.minimum(vn, 0.0)
-        dv_n = -approach + np.maximum(0.0, (thickness - dist[hit])) / dt * 0.0
+        dv_n = -approach
         tangential = rel - vn[:, None] * n  # Eq. 11
         speed_t = np.linalg.norm(tangential, axis=1)
         mu = np.asarray(friction)[hit] if np.ndim(friction) else float(friction)
         # Eq. 14: friction removes at most μ·(normal velocity change); beyond that it stops sliding
         keep = np.where(speed_t > 0, np.maximum(0.0, 1.0 - mu * dv_n / np.maximum(speed_t, 1e-300)), 0.0)
         new_rel = np.where(vn[:, None] < 0, tangential * keep[:, None], rel)
-        state.v[hit] = vb + new_rel
+        v_new = vb + new_rel
+        # the step already moved the vertex with its old velocity: move it as the new one would
+        state.x[hit] += dt * (v_new - state.v[hit])
+        state.v[hit] = v_new
         return depth

@@ -12,11 +12,11 @@ LAYERS = {
     "errors": 0, "units": 0, "landmarks": 0,
     "geometry": 1, "curves": 1, "topology": 1, "hanging": 1,
     "pattern": 2, "fabric": 2, "body": 2,
-    "mesh": 3, "seams": 3, "placement": 3, "mannequin": 3, "measure": 3,
+    "mesh": 3, "placement": 3, "mannequin": 3, "measure": 3,
     "params": 4, "model": 4,
-    "forces": 5, "collide": 5,
+    "forces": 5, "collide": 5, "seams": 5,
     "integrators": 6,
-    "sim": 7, "scenes": 7,
+    "sim": 7, "scenes": 7, "drape": 7,
     "io": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9,
 }
 OWNERS = {"triangle": {"mesh"}, "fcl": {"collide"}, "meshio": {"io"}, "skimage": {"mannequin"}, "matplotlib": {"io"}}

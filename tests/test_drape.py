@@ -1,0 +1,137 @@
+"""Dressing: merging conserves momentum, friction switches at tan θ = μ, a skirt dresses and walks."""
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import PANELS, sheet
+from tailor.body import Body
+from tailor.cli import main
+from tailor.collide import BodyCollider
+from tailor.drape import drape
+from tailor.geometry import connected_components
+from tailor.io import read_pattern
+from tailor.io.body_files import read_body
+from tailor.io.garment import write_drape
+from tailor.measure import find_landmarks
+from tailor.seams import Sewing, merge_state
+from tailor.units import GRAVITY
+
+
+def test_merging_conserves_linear_momentum_and_mass_exactly():
+    rng = np.random.default_rng(4)
+    n = 50
+    x, v, m = rng.normal(size=(n, 3)), rng.normal(size=(n, 3)), rng.uniform(0.1, 2.0, n)
+    sewing = Sewing(np.array([[0, 1], [1, 2], [10, 20], [30, 30]]))  # a chain, a pair, a self-pair
+    assert len(sewing.pairs) == 3
+    sewing.merged[:] = True
+    weld = sewing.weld_map(n)
+    assert weld[0] == weld[1] == weld[2] and weld[10] == weld[20] and len(np.unique(weld)) == n - 3
+    xw, vw = merge_state(x, v, m, weld)
+    mw = np.bincount(weld, m)
+    assert mw.sum() == pytest.approx(m.sum(), rel=1e-15)
+    assert np.allclose((mw[:, None] * vw).sum(axis=0), (m[:, None] * v).sum(axis=0), rtol=0, atol=1e-12)
+    # Eq. 18: r_m = r1 + (r2 − r1)·m2/(m1 + m2) for a single pair
+    assert np.allclose(xw[weld[10]], x[10] + (x[20] - x[10]) * m[20] / (m[10] + m[20]))
+
+
+def _incline(angle):
+    """A 3 m × 3 m plane through the origin tilted by ``angle`` about x, as a body."""
+    c, s = np.cos(angle), np.sin(angle)
+    pts = np.array([[-1.5, -1.5, 0.0], [1.5, -1.5, 0.0], [1.5, 1.5, 0.0], [-1.5, 1.5, 0.0]])
+    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    return Body((pts @ rot.T)[None], np.array([[0, 1, 2], [0, 2, 3]]))
+
+
+@pytest.mark.parametrize("ratio,slides", [(0.85, False), (1.15, True)])
+def test_cloth_on_an_incline_slides_exactly_when_tan_theta_exceeds_mu(ratio, slides):
+    mu = 0.4
+    angle = np.arctan(ratio * mu)
+    model, x0 = sheet(10, 10, 0.05, "cotton", vertical=False, air_density=0.0)
+    c, s = np.cos(angle), np.sin(angle)
+    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    thickness = 0.003
+    x = (x0 - [0.05, 0.05, 0.0] + [0.0, 0.0, thickness]) @ rot.T
+    body = _incline(angle)
+    collider = BodyCollider(body.frames, body.faces, margin=0.02)
+    state = model.state(x)
+    from tailor.forces import total_forces
+    from tailor.integrators import make_integrator
+
+    integ = make_integrator("symplectic")
+    dt = model.time_step
+    for _ in range(int(round(0.5 / dt))):
+        state = integ.step(model, state, dt, total_forces)
+        collider.respond(model, state, dt, body.frames[0], np.zeros_like(body.frames[0]), 0,
+                         thickness=thickness, friction=mu)
+    down_slope = np.array([0.0, -c, -s])
+    travel = float(((state.x - x) @ down_slope).mean())
+    if slides:  # (sin θ − μ cos θ)·g·t²/2 after 0.5 s
+        expected = 0.5 * GRAVITY * (np.sin(angle) - mu * np.cos(angle)) * 0.5**2
+        assert travel == pytest.approx(expected, rel=0.1)
+    else:
+        assert abs(travel) < 1e-4
+
+
+@pytest.fixture(scope="module")
+def skirt_static():
+    pattern = read_pattern(PANELS / "skirt.json")
+    body = read_body("mannequin")
+    return pattern, body, drape(pattern, body, frames=3, resolution=0.04)
+
+
+def test_skirt_sews_into_one_piece_without_penetration(skirt_static, tmp_path):
+    pattern, body, result = skirt_static
+    out = write_drape(result, tmp_path / "skirt")
+    files = sorted(p.name for p in out.iterdir())
+    assert files == ["garment.mtl", "garment_0000.obj", "garment_0001.obj", "garment_0002.obj", "report.json"]
+    lines = (out / "garment_0000.obj").read_text().splitlines()
+    vertices = np.array([[float(a) for a in ln.split()[1:]] for ln in lines if ln.startswith("v ")])
+    faces = np.array([[int(c.split("/")[0]) - 1 for c in ln.split()[1:]] for ln in lines if ln.startswith("f ")])
+    assert np.isfinite(vertices).all()
+    assert len(np.unique(connected_components(len(vertices), faces))) == 1  # sewn: one piece
+    assert len(vertices) == result.report["welded_vertices"] < result.report["vertices"]
+    report = json.loads((out / "report.json").read_text())
+    assert report["max_penetration_m"] <= 0.002
+    assert report["phases"]["sewing"]["max_gap_at_merge_m"] <= 0.3 * 0.04 + 1e-9
+    # every seam pair is one vertex now: gap exactly 0
+    x = result.frames[-1]
+    sewing_pairs = result.mesh.seam_pairs[result.mesh.seam_pairs[:, 0] != result.mesh.seam_pairs[:, 1]]
+    assert np.all(x[sewing_pairs[:, 0]] == x[sewing_pairs[:, 1]])
+
+
+def test_skirt_waistband_sits_at_the_waist(skirt_static):
+    pattern, body, result = skirt_static
+    waist = find_landmarks(body.vertices, body.faces)["waist"].height
+    band = np.concatenate([result.mesh.panel_vertices(pattern.panel_index(n)) for n in ("wb_front", "wb_back")])
+    assert abs(result.frames[-1][band, 2].mean() - waist) < 0.03
+
+
+def test_skirt_stays_up_on_the_walking_mannequin():
+    pattern = read_pattern(PANELS / "skirt.json")
+    body = read_body("mannequin-walk")
+    result = drape(pattern, body, frames=25, resolution=0.04)
+    band = np.concatenate([result.mesh.panel_vertices(pattern.panel_index(n)) for n in ("wb_front", "wb_back")])
+    drop = result.frames[0][band, 2].mean() - result.frames[-1][band, 2].mean()
+    assert abs(drop) < 0.02
+    assert max(result.report["max_penetration_m_per_frame"]) <= 0.002
+    # the attached top edge of the waistband follows the moving body: it stays on its surface
+    top = np.concatenate([result.mesh.edge_vertices[(pattern.panel_index(n), None, 2)] for n in ("wb_front", "wb_back")])
+    collider = BodyCollider(body.frames, body.faces, margin=0.05)
+    dist0 = collider.nearest(result.frames[0][top], result.body_frames[0], 0, cache=False)[0]
+    for k in (12, 24):
+        dist, tri, _, _ = collider.nearest(result.frames[k][top], result.body_frames[k], k % body.frame_count, cache=False)
+        assert np.all(tri >= 0) and np.all(np.abs(dist - dist0) < 0.003)  # held at its place on the body
+
+
+def test_cli_drape_refuses_bad_input_and_leaves_no_output(tmp_path, capsys):
+    points = tmp_path / "points.obj"
+    points.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    out = tmp_path / "out"
+    assert main(["drape", str(PANELS / "skirt.json"), "--body", str(points), "--out", str(out)]) == 2
+    assert "points.obj: the mesh has no faces" in capsys.readouterr().err and not out.exists()
+    assert main(["drape", str(PANELS / "skirt.json"), "--out", str(out), "--resolution", "5", "--sew-timeout", "0.08"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "seam vertex pairs are still open" in err and not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")]
