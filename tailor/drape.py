@@ -32,7 +32,13 @@ from .integrators import make_integrator
 from .seams import Sewing, merge_state
 from .sim import Guard, simulate
 
-__all__ = ["drape", "DrapeResult"]
+__all__ = ["drape", "DrapeResult", "NEAR_SEAM", "NEAR_RATE"]
+
+NEAR_SEAM = 0.08
+"""Seam pairs closer than this [m] are pulled by stiff implicit springs."""
+
+NEAR_RATE = 80000.0
+"""Their rate k [1/s²] (Eq. 15's k·η folded in): strong enough to stretch a waistband into place."""
 
 log = logging.getLogger(__name__)
 
@@ -151,6 +157,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
                         gravity=(0.0, 0.0, -9.80665) if sim["gravity"] else (0.0, 0.0, 0.0))
         if len(sim["pins"]):
             m = m.with_pins(np.unique(new[sim["pins"]]))
+        if sewing.open_count:
+            pairs = sewing.open_pairs(new)
+            m = m.with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
         sim["weld"], sim["model"] = new, m
         sim["rebuilds"] += 1
         return m.state(xw, vw, 0.0)
@@ -179,6 +188,10 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         """Simulate ``duration`` seconds on the current welded model; return the final state."""
         t = state.t
         last = state
+        m = sim["model"]
+        if len(m.pair_vertices):  # near seam pairs get stiff implicit springs for this frame
+            k, c = sewing.near_stiffness(state.x, m.pair_vertices, m.vertex_mass, near=NEAR_SEAM, rate=NEAR_RATE)
+            sim["model"] = replace(m, pair_stiffness=k, pair_damping=c)
         # sewing is assembly, not physics: corners pulled three ways may stretch far until merged
         # and relaxed, so the guard is looser until the body starts moving
         guard = Guard(max_stretch=6.0) if sim["motion_start"] is None else Guard()
@@ -201,6 +214,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     # 1. sewing, gravity off: one frame at a time, welding what closed
     t0 = time.perf_counter()
     sim["model"] = replace(unwelded, gravity=np.zeros(3))
+    pairs0 = sewing.open_pairs(sim["weld"])
+    sim["model"] = sim["model"].with_pairs(pairs0, np.zeros(len(pairs0)), np.zeros(len(pairs0)))
     state = sim["model"].state(x0)
     sew_frames = 0
     t = 0.0
@@ -208,6 +223,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         state = advance(state, frame_dt)
         t += frame_dt
         sew_frames += 1
+        if t >= 0.5 * sew_timeout:  # stragglers held apart by two seams at a corner: Eq. 16's d grows
+            sewing.merge_distance = max(sewing.merge_distance, 0.5 * resolution)
         if sewing.close(state.x[sim["weld"]]):
             state = rebuild(state.x, state.v)
             state.t = t

@@ -134,9 +134,12 @@ class ImplicitEuler:
         self._warm = None
 
     def _pattern_for(self, model):
-        if self._pattern_model is not model:
+        # the sparsity depends only on the topology arrays: copies of a model that share them
+        # (other pair stiffnesses, pins) reuse it
+        key = (id(model.faces), id(model.hinge_vertices), id(model.pair_vertices), model.has_bending, model.elastic)
+        if self._pattern_model != key:
             self._pattern = SparsePattern(model)
-            self._pattern_model = model
+            self._pattern_model = key
             self._warm = None
         return self._pattern
 

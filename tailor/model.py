@@ -76,6 +76,8 @@ class Model:
         Walker's structural, shear and flexion springs (used when ``elastic == "springs"``),
         stiffness calibrated to the membrane's energy, dampers critical for the net's fastest mode.
     gravity : (3,) [m/s²]
+    pair_vertices : (P, 2) int; pair_stiffness (P,) [N/m]; pair_damping (P,) [N·s/m]
+        Zero-length springs between vertex pairs (seams being closed), integrated implicitly.
     air_density : float [kg/m³]
         0 = vacuum (no drag, no wind).
     drag_coefficient : float
@@ -114,6 +116,9 @@ class Model:
     spring_stiffness: np.ndarray
     spring_damping: np.ndarray
     gravity: np.ndarray
+    pair_vertices: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.intp))
+    pair_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    pair_damping: np.ndarray = field(default_factory=lambda: np.zeros(0))
     air_density: float = 0.0
     drag_coefficient: float = 1.0
     time_step: float = 1e-3
@@ -145,6 +150,11 @@ class Model:
     def total_mass(self) -> float:
         """[kg]."""
         return float(self.vertex_mass.sum())
+
+    def with_pairs(self, pairs, stiffness, damping) -> "Model":
+        """A copy with zero-length pair springs (``pairs`` (P, 2), stiffness [N/m], damping [N·s/m])."""
+        return replace(self, pair_vertices=_frozen(np.asarray(pairs, np.intp).reshape(-1, 2)),
+                       pair_stiffness=_frozen(np.asarray(stiffness, float)), pair_damping=_frozen(np.asarray(damping, float)))
 
     def with_pins(self, pinned) -> "Model":
         """A copy with ``pinned`` (bool mask or indices) held in place."""
@@ -327,6 +337,8 @@ def build_model(
         irregular triangulation are locally soft where triangles are thin (near boundaries): the
         membrane is the accurate model, the net the classic fast one.
     gravity : (3,) [m/s²]
+    pair_vertices : (P, 2) int; pair_stiffness (P,) [N/m]; pair_damping (P,) [N·s/m]
+        Zero-length springs between vertex pairs (seams being closed), integrated implicitly.
     air_density : float [kg/m³]
         0 (default) = vacuum; :data:`AIR_DENSITY` for air drag.
     damping : float

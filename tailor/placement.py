@@ -6,9 +6,9 @@ Two kinds of placement come from the pattern:
 * a body-relative :class:`~tailor.pattern.LandmarkPlacement`: the panel is rolled around the
   named landmark's cross-section (an ellipse for the trunk, a circle for a limb) at ``clearance``
   from the body, its anchor at the landmark's ``angle``, its +y along the landmark's axis and its
-  outside facing out. A row of the panel wider than its share of the circumference (a flared
-  skirt) is rolled on a wider circle instead, so panels never overlap: with n panels at one
-  landmark, each may span at most 360°/n.
+  outside facing out. Rolling onto a cylinder bends the panel without straining it; a panel whose
+  widest row exceeds its share of the circumference (a flared skirt) is rolled on a wider
+  cylinder, so panels never overlap: with n panels at one landmark at n different angles, each spans at most 360°/n.
 """
 
 from __future__ import annotations
@@ -60,7 +60,9 @@ def _wrap(uv, anchor, lm, placement, share):
     centre = np.argmin(np.abs(0.5 * (edges[:-1] + edges[1:]))) if len(edges) > 1 else 0
     width[centre:] = np.maximum.accumulate(width[centre:])
     width[: centre + 1] = np.maximum.accumulate(width[: centre + 1][::-1])[::-1]
-    grow = np.maximum(1.0, width / max(share, 1e-6) * 1.05 / perimeter)[band]
+    # one radius for the whole panel: rolling onto a cylinder is an isometry (no initial strain),
+    # wide enough that the panel's widest row fits its share of the circumference
+    grow = float(np.max(np.maximum(1.0, width / max(share, 1e-6) * 1.05 / perimeter), initial=1.0))
     # arc length → angle on the ellipse (scaled per band), from the anchor's azimuth
     phi = np.linspace(0.0, 2.0 * math.pi, 721)
     unit = np.column_stack([a * np.sin(phi), b * np.cos(phi)])
@@ -88,10 +90,11 @@ def place_panels(pattern, mesh, landmarks=None) -> np.ndarray:
         A panel without a placement, or a landmark placement without a body.
     """
     x = np.zeros((mesh.vertex_count, 3))
-    counts: dict = {}
+    counts: dict = {}  # panels side by side around a landmark: distinct angles (bands stack vertically)
     for p in pattern.panels:
         if isinstance(p.placement, LandmarkPlacement):
-            counts[p.placement.landmark] = counts.get(p.placement.landmark, 0) + 1
+            counts.setdefault(p.placement.landmark, set()).add(round(p.placement.angle % (2 * math.pi), 6))
+    counts = {k: len(v) for k, v in counts.items()}
     for pi, panel in enumerate(pattern.panels):
         ids = mesh.panel_vertices(pi)
         uv = mesh.uv[ids]

@@ -90,6 +90,24 @@ class Sewing:
             out[:, k] -= np.bincount(j, m[j] * accel[:, k], minlength=len(out))
         return out
 
+    def open_pairs(self, weld) -> np.ndarray:
+        """Open pairs in welded indices (a pair already joined through others is dropped), (P, 2)."""
+        p = weld[self.pairs[~self.merged]]
+        return p[p[:, 0] != p[:, 1]]
+
+    def near_stiffness(self, x, pairs, mass, *, near: float, rate: float):
+        """Stiffness [N/m] and damping [N·s/m] of implicit springs on the ``pairs`` closer than ``near``.
+
+        A zero-length spring of stiffness m·k (Eq. 15's k·m, m the pair's mean mass) is far too
+        stiff to integrate explicitly once k is large enough to stretch cloth into place; the
+        implicit solver takes it in its stride. Pairs farther than ``near`` get none (the gentle
+        explicit pull of :meth:`forces` brings them closer first).
+        """
+        gap = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
+        m = 0.5 * (mass[pairs[:, 0]] + mass[pairs[:, 1]])
+        k = np.where(gap < near, m * rate, 0.0)
+        return k, 2.0 * np.sqrt(k * m)
+
     def close(self, x) -> int:
         """Mark the open pairs closer than d (Eq. 16) at unwelded positions ``x``; return how many."""
         open_ = np.flatnonzero(~self.merged)

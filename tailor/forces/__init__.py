@@ -28,6 +28,7 @@ __all__ = [
     "bending_forces",
     "spring_energy",
     "spring_forces",
+    "pair_forces",
     "gravity_forces",
     "gravity_energy",
     "air_forces",
@@ -48,6 +49,20 @@ def internal_forces(model, state, out=None) -> np.ndarray:
         membrane_forces_into(model, state, out, stiffness=secant_membrane_stiffness(model, state.x) if curves else None)
     if model.has_bending:
         bending_forces_into(model, state, out, stiffness=secant_hinge_stiffness(model, state.x) if curves else None)
+    if len(model.pair_vertices):
+        pair_forces(model, state, out)
+    return out
+
+
+def pair_forces(model, state, out=None) -> np.ndarray:
+    """Zero-length pair springs with dampers: f_i = K(x_j − x_i) + C(v_j − v_i), and the opposite on j [N]."""
+    out = np.zeros_like(state.x) if out is None else out
+    p = model.pair_vertices
+    i, j = p[:, 0], p[:, 1]
+    f = model.pair_stiffness[:, None] * (state.x[j] - state.x[i]) + model.pair_damping[:, None] * (state.v[j] - state.v[i])
+    n = len(out)
+    for k in range(3):
+        out[:, k] += np.bincount(i, f[:, k], minlength=n) - np.bincount(j, f[:, k], minlength=n)
     return out
 
 

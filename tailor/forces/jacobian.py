@@ -43,6 +43,9 @@ class SparsePattern:
             groups = [model.spring_vertices]
         if model.has_bending:
             groups.append(model.hinge_vertices)
+        self.has_pairs = len(model.pair_vertices) > 0
+        if self.has_pairs:
+            groups.append(model.pair_vertices)
         rows, cols, sizes = [], [], []
         for g in groups:
             r, c = _block_indices(np.asarray(g))
@@ -122,7 +125,16 @@ def jacobian_data(model, state, pattern: SparsePattern):
     if model.has_bending:
         bending_jacobian_into(model, state.x, pattern.positions[1], kdata,
                               stiffness=secant_hinge_stiffness(model, state.x) if curves else None)
+    if pattern.has_pairs:
+        _add_pair_blocks(model, pattern.positions[-1], kdata, cdata)
     return kdata, cdata
+
+
+def _add_pair_blocks(model, positions, kdata, cdata):
+    """K·[[I, −I], [−I, I]] and C·[[I, −I], [−I, I]] of the pair springs into CSR data."""
+    block = np.einsum("ab,ij->aibj", np.array([[1.0, -1.0], [-1.0, 1.0]]), np.eye(3)).reshape(36)
+    np.add.at(kdata, positions.reshape(-1), (model.pair_stiffness[:, None] * block).reshape(-1))
+    np.add.at(cdata, positions.reshape(-1), (model.pair_damping[:, None] * block).reshape(-1))
 
 
 def force_jacobians(model, state, pattern: SparsePattern):
