@@ -81,7 +81,6 @@ def _cmd_mesh(args) -> int:
 
 
 def _fabric_from_args(args):
-    from .errors import FabricError
     from .fabric import preset
 
     fabric = preset(args.fabric)
@@ -96,12 +95,7 @@ def _fabric_from_args(args):
         values["bending"] = args.bending
     if not values:
         return fabric
-    try:
-        return fabric.with_values(name=f"{fabric.name} (custom)", **values)
-    except FabricError:
-        raise
-    except TypeError as exc:  # pragma: no cover - argparse guarantees the types
-        raise FabricError(str(exc)) from None
+    return fabric.with_values(name=f"{fabric.name} (custom)", **values)
 
 
 def _cmd_params(args) -> int:

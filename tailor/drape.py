@@ -144,7 +144,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               "fabrics": {p.name: fabrics[i].name for i, p in enumerate(pattern.panels)},
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
               "active": {"bending": unwelded.has_bending, "air": True, "body_collision": True, "self_collision": False}}
-    sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp),
+    sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
            "attach": None, "motion_start": None, "rebuilds": 0}
 
     def rebuild(state_x, state_v):
@@ -161,6 +161,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             pairs = sewing.open_pairs(new)
             m = m.with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
         sim["weld"], sim["model"] = new, m
+        sim["friction"] = friction_of[np.unique(new, return_index=True)[1]]  # per welded vertex
         sim["rebuilds"] += 1
         return m.state(xw, vw, 0.0)
 
@@ -178,8 +179,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         bx, bv, k = body_state(state.t)
         if sim["attach"] is not None:
             sim["attach"].apply(state, bx, bv)
-        friction = friction_of[np.unique(sim["weld"], return_index=True)[1]]
-        deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness, friction=friction))
+        deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness,
+                                                      friction=sim["friction"]))
 
     def forces(model_, state):
         return sewing.forces(model_, state, sim["weld"], total_forces(model_, state))

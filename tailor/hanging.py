@@ -12,13 +12,13 @@ from scipy.optimize import brentq
 
 from .units import GRAVITY
 
-__all__ = ["hanging_strain", "REFERENCE_HEIGHT"]
+__all__ = ["hanging_strain", "mean_strain_of_hanging_strip", "REFERENCE_HEIGHT"]
 
 REFERENCE_HEIGHT = 1.0
 """Height [m] of the hanging strip that defines the stretch percentage (Eq. 22)."""
 
 
-def _mean_strain_of_hanging_strip(top_stretch: float) -> float:
+def mean_strain_of_hanging_strip(top_stretch: float) -> float:
     """Mean strain of a Green-strain strip whose top stretch ratio is S, per unit τ = ρgH/η.
 
     Tension at rest height y above the free end: η·½(s²−1)·s = ρ·g·y, i.e. s³ − s = 2t with
@@ -37,4 +37,4 @@ def hanging_strain(density: float, stiffness: float, height: float = REFERENCE_H
     """
     tau = density * GRAVITY * height / stiffness
     top = brentq(lambda s: s**3 - s - 2.0 * tau, 1.0, 2.0 + 2.0 * tau)
-    return _mean_strain_of_hanging_strip(top)
+    return mean_strain_of_hanging_strip(top)

@@ -45,7 +45,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .fabric import Fabric
-from .hanging import REFERENCE_HEIGHT, _mean_strain_of_hanging_strip, hanging_strain
+from .hanging import REFERENCE_HEIGHT, mean_strain_of_hanging_strip, hanging_strain
 from .units import CM, GRAVITY
 
 __all__ = [
@@ -74,7 +74,7 @@ def stretch_stiffness(density: float, stretch: float) -> float:
 
     Exact for the Green-strain membrane; η = ρgH/(2λ) in the small-strain limit.
     """
-    top = brentq(lambda s: _mean_strain_of_hanging_strip(s) - stretch, 1.0 + 1e-12, 10.0)
+    top = brentq(lambda s: mean_strain_of_hanging_strip(s) - stretch, 1.0 + 1e-12, 10.0)
     tau = 0.5 * (top**3 - top)
     return density * GRAVITY * REFERENCE_HEIGHT / tau
 

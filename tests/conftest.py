@@ -53,6 +53,14 @@ def two_panel_doc():
     )
 
 
+@pytest.fixture(scope="session")
+def mannequin():
+    """tailor's own default body, as shipped in bodies/."""
+    from tailor.io.body_files import read_body
+
+    return read_body("mannequin")
+
+
 @pytest.fixture
 def garmentcode_dir():
     """``../shared/garmentcode`` (reference patterns, not in the repository); skip when absent."""

@@ -14,11 +14,6 @@ from tailor.measure import find_landmarks
 
 
 @pytest.fixture(scope="module")
-def mannequin():
-    return read_body("mannequin")
-
-
-@pytest.fixture(scope="module")
 def reference(mannequin):
     return find_landmarks(mannequin.vertices, mannequin.faces)
 

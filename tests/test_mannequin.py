@@ -12,11 +12,6 @@ DEFAULT = MEASUREMENT_PRESETS["default"]
 
 
 @pytest.fixture(scope="module")
-def mannequin():
-    return read_body("mannequin")
-
-
-@pytest.fixture(scope="module")
 def landmarks(mannequin):
     return find_landmarks(mannequin.vertices, mannequin.faces)
 

@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import TailorError
-from .atomic import write_text_atomic
 from .obj import obj_text
 
 __all__ = ["write_drape"]
@@ -79,8 +78,3 @@ def _jsonable(value):
     if isinstance(value, (np.floating, np.integer, np.bool_)):
         return value.item()
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
-
-
-def write_report(path, report: dict) -> None:
-    """Write a report dict as JSON atomically."""
-    write_text_atomic(path, json.dumps(report, indent=2, default=_jsonable))
