@@ -30,7 +30,7 @@ from .model import AIR_DENSITY, build_model
 from .placement import place_panels
 from .integrators import make_integrator
 from .seams import Sewing, merge_state
-from .sim import Guard, simulate
+from .sim import Guard, max_stretch, simulate
 
 __all__ = ["drape", "DrapeResult", "NEAR_SEAM", "NEAR_RATE"]
 
@@ -194,8 +194,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             k, c = sewing.near_stiffness(state.x, m.pair_vertices, m.vertex_mass, near=NEAR_SEAM, rate=NEAR_RATE)
             sim["model"] = replace(m, pair_stiffness=k, pair_damping=c)
         # sewing is assembly, not physics: corners pulled three ways may stretch far until merged
-        # and relaxed, so the guard is looser until the body starts moving
-        guard = Guard(max_stretch=6.0) if sim["motion_start"] is None else Guard()
+        # and relaxed, so the guard is looser until the body starts moving; then it watches for growth
+        guard = Guard(max_stretch=6.0) if sim["motion_start"] is None else Guard(max_stretch=sim["motion_limit"])
         for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
                                 hooks=[hook], forces=forces, guard=guard):
             continue
@@ -269,6 +269,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     # 3. motion, one frame every 1/fps
     t0 = time.perf_counter()
     sim["motion_start"] = state.t
+    dressed_stretch = max_stretch(sim["model"], state.x)
+    sim["motion_limit"] = max(Guard().max_stretch, 1.5 * dressed_stretch)
+    report["max_triangle_stretch_dressed"] = dressed_stretch
     penetration = []
     for f in range(frames):
         if f:

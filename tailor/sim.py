@@ -21,7 +21,7 @@ from .forces import total_forces
 from .forces.membrane import deformation_gradient
 from .integrators import make_integrator
 
-__all__ = ["Guard", "check_state", "simulate", "run", "IMPLICIT_STEP"]
+__all__ = ["Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP"]
 
 IMPLICIT_STEP = 0.01
 """Default step of the implicit integrator [s]: stable far beyond Eq. 24, four steps per 25 fps frame."""
@@ -48,7 +48,8 @@ class Guard:
     strain_every: int = 50
 
 
-def _max_stretch(model, x) -> float:
+def max_stretch(model, x) -> float:
+    """Largest principal stretch of any triangle (1 = rest)."""
     f = deformation_gradient(model, x)
     c = np.einsum("fki,fkj->fij", f, f)  # right Cauchy–Green, (F, 2, 2)
     tr = c[:, 0, 0] + c[:, 1, 1]
@@ -77,7 +78,7 @@ def check_state(model, state, *, step: int, dt: float, integrator: str = "?", fr
             f"simulation unstable at {where}: a vertex moves at {speed:.3g} m/s (limit {guard.max_speed:g}); {_remedy(integrator, dt)}"
         )
     if strain and model.face_count:
-        s = _max_stretch(model, state.x)
+        s = max_stretch(model, state.x)
         if s > guard.max_stretch:
             raise SimulationUnstable(
                 f"simulation unstable at {where}: a triangle is stretched {s:.3g}× its rest size "

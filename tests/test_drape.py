@@ -164,3 +164,17 @@ def test_stiff_pair_springs_close_a_gap_stably_under_the_implicit_solver():
         state = integ.step(stiff, state, 0.01, total_forces)
         gaps.append(np.linalg.norm(state.x[pairs[:, 0]] - state.x[pairs[:, 1]], axis=1).max())
     assert np.isfinite(state.x).all() and gaps[-1] < 0.01 * 0.2 and gaps[-1] <= gaps[0]
+
+
+def test_tshirt_sews_and_follows_the_walk():
+    pattern = read_pattern(PANELS / "tshirt.json")
+    result = drape(pattern, read_body("mannequin-walk"), frames=5, resolution=0.04)
+    weld = result.weld
+    faces = weld[result.mesh.faces]
+    assert len(np.unique(connected_components(int(weld.max()) + 1, faces))) == 1  # front, back, sleeves: one piece
+    assert max(result.report["max_penetration_m_per_frame"]) <= 0.002
+    assert all(np.isfinite(f).all() for f in result.frames)
+    # it hangs from the shoulders: the neckline stays above the bust
+    marks = find_landmarks(result.body_frames[0], result.body_faces)
+    neck = result.mesh.edge_vertices[(pattern.panel_index("front"), None, 4)]
+    assert result.frames[-1][neck, 2].min() > marks["bust"].height
