@@ -135,6 +135,7 @@ class BodyCollider:
         self.margin = float(margin)
         self._bvh = {}
         self._cache = None  # (frame, positions at query, ptr, tri)
+        self._previous = None  # signed distance of every vertex after the last response
         self.queries = 0
 
     def _body(self, frame):
@@ -202,13 +203,19 @@ class BodyCollider:
         Returns the deepest penetration [m] found before the response (0 if none).
         """
         dist, tri, bary, normal = self.nearest(state.x, body_x, frame)
-        # deeper than half the margin cannot have happened within one step: the closest triangle is
-        # on the far side of a thin or concave part (armpit, crotch), so leave those alone
-        # a resting band above the thickness keeps resting contact from flickering on and off
-        hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & (dist > -0.5 * self.margin))
+        # A vertex found deeper than half the margin either crossed the surface this step (it was
+        # outside before: push it back) or lies near the far side of a thin or concave part
+        # (armpit, crotch) where the closest triangle is not the one it entered by: leave those.
+        # A resting band above the thickness keeps resting contact from flickering on and off.
+        prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
+        crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
+        plausible = (dist > -0.5 * self.margin) | crossed
+        hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & plausible)
+        self._previous = np.where(tri >= 0, dist, np.inf)
         if not len(hit):
             return 0.0
         depth = float(max(0.0, -dist[hit].min()))
+        self._previous[hit] = thickness  # pushed back out below
         f = self.faces[tri[hit]]
         w = bary[hit]
         vb = (body_v[f] * w[:, :, None]).sum(axis=1)  # body velocity at the contact point (Eq. 9)

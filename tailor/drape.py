@@ -185,6 +185,10 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     def forces(model_, state):
         return sewing.forces(model_, state, sim["weld"], total_forces(model_, state))
 
+    # while the body moves, no body point may travel more than half the contact margin in one step
+    body_speed = float(np.abs(np.diff(body.frames, axis=0)).max() * body.fps) if body.frame_count > 1 else 0.0
+    motion_dt = min(0.01, 0.5 * collider.margin / body_speed) if body_speed > 0 else None
+
     def advance(state, duration):
         """Simulate ``duration`` seconds on the current welded model; return the final state."""
         t = state.t
@@ -196,8 +200,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         # sewing is assembly, not physics: corners pulled three ways may stretch far until merged
         # and relaxed, so the guard is looser until the body starts moving; then it watches for growth
         guard = Guard(max_stretch=6.0) if sim["motion_start"] is None else Guard(max_stretch=sim["motion_limit"])
+        dt = motion_dt if sim["motion_start"] is not None else None
         for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
-                                hooks=[hook], forces=forces, guard=guard):
+                                hooks=[hook], forces=forces, guard=guard, dt=dt):
             continue
         last.t = t + duration
         return last
@@ -283,7 +288,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         emit(state, bx)
         if progress:
             progress("motion", f + 1, frames)
-    report["phases"]["motion"] = {"simulated_s": (frames - 1) / fps, "frames": frames, "wall_s": time.perf_counter() - t0}
+    report["phases"]["motion"] = {"simulated_s": (frames - 1) / fps, "frames": frames, "wall_s": time.perf_counter() - t0,
+                                  "time_step_s": motion_dt, "body_max_speed_m_s": body_speed}
     report["max_penetration_m_per_frame"] = penetration
     report["max_penetration_m"] = max(penetration) if penetration else 0.0
     report["wall_s"] = time.perf_counter() - t_start
