@@ -15,8 +15,15 @@ from .errors import (
 )
 from .fabric import PRESETS, Fabric, preset
 from .io import pattern_from_dict, read_pattern
+from .body import Body
+from .drape import DrapeResult, drape
+from .io.body_files import read_body
+from .io.garment import write_drape
+from .measure import Landmark, find_landmarks
 from .mesh import GarmentMesh, discretise
+from .model import Model, State, build_model
 from .pattern import Pattern, validate_pattern
+from .sim import simulate
 
 __version__ = "0.1.0"
 
@@ -38,4 +45,15 @@ __all__ = [
     "pattern_from_dict",
     "GarmentMesh",
     "discretise",
+    "Model",
+    "State",
+    "build_model",
+    "simulate",
+    "Body",
+    "read_body",
+    "Landmark",
+    "find_landmarks",
+    "drape",
+    "DrapeResult",
+    "write_drape",
 ]
