@@ -56,6 +56,9 @@ class DrapeResult:
     mesh : GarmentMesh
     weld : (N,) int
         Index of each vertex in the welded garment (merged seam vertices share one).
+    body_faces : (F, 3) int
+        Triangles of the body frames.
+    pattern : Pattern
     report : dict
         Inputs, derived parameters, steps and wall time per phase, seam gaps, penetration.
     """
@@ -294,5 +297,6 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     report["max_penetration_m"] = max(penetration) if penetration else 0.0
     report["wall_s"] = time.perf_counter() - t_start
     report["body_bvh_queries"] = collider.queries
+    report["max_contact_correction_m"] = deepest[0]  # deepest penetration any step had to undo
     report["welded_vertices"] = int(sim["model"].vertex_count)
     return DrapeResult(out_frames, body_frames, mesh, sim["weld"], body.faces, pattern, report)

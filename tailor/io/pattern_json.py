@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..curves import Curve
+from ..curves import Curve, sample_curve
 from ..errors import FabricError, PatternError
 from ..fabric import DEFAULT_FABRIC, Fabric, KawabataCurves, fabric_names, preset
 from ..landmarks import LANDMARKS
@@ -349,8 +349,6 @@ def _seam(node: Node, index: int, panels: dict) -> Seam:
 
 
 def _side_ends_3d(side: SeamSide, panel: Panel):
-    from ..curves import sample_curve
-
     uv = sample_curve(panel.loop(side.hole)[side.edge].curve, [side.start, side.end])
     return panel.placement.apply(uv)
 
