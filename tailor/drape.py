@@ -233,7 +233,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         t += frame_dt
         sew_frames += 1
         if t >= 0.5 * sew_timeout:  # stragglers held apart by two seams at a corner: Eq. 16's d grows
-            sewing.merge_distance = max(sewing.merge_distance, 0.5 * resolution)
+            sewing.merge_distance = max(sewing.merge_distance, 0.6 * resolution)
         if sewing.close(state.x[sim["weld"]]):
             state = rebuild(state.x, state.v)
             state.t = t

@@ -178,3 +178,11 @@ def test_tshirt_sews_and_follows_the_walk():
     marks = find_landmarks(result.body_frames[0], result.body_faces)
     neck = result.mesh.edge_vertices[(pattern.panel_index("front"), None, 4)]
     assert result.frames[-1][neck, 2].min() > marks["bust"].height
+
+
+def test_garmentcode_pants_drape_with_their_own_placement(garmentcode_dir):
+    pattern = read_pattern(garmentcode_dir / "pants_specification.json")
+    result = drape(pattern, read_body("mannequin"), frames=2, resolution=0.04)
+    faces = result.weld[result.mesh.faces]
+    assert len(np.unique(connected_components(int(result.weld.max()) + 1, faces))) == 1
+    assert result.report["max_penetration_m"] <= 0.002
