@@ -161,14 +161,15 @@ def find_landmarks(vertices, faces) -> dict:
             polys = [p for p in cuts[i] if sign * p.centroid.x > 0.02]
             return max(polys, key=lambda p: p.area) if polys else None
 
-        leg_girth = np.array([leg(i).convex_hull.length if leg(i) is not None else np.nan for i in range(len(z))])
+        legs = [leg(i) for i in range(len(z))]
+        leg_girth = np.array([g.convex_hull.length if g is not None else np.nan for g in legs])
         i_thigh = max(i_crotch - int(0.03 / 0.005), 0)
         i_knee = _argbest(z, leg_girth, 0.22 * height, 0.36 * height, "min")
         i_ankle = _argbest(z, leg_girth, 0.03 * height, 0.12 * height, "min")
         for name, i in (("thigh", i_thigh), ("knee", i_knee), ("ankle", i_ankle)):
-            if i is None or leg(i) is None:
+            if i is None or legs[i] is None:
                 raise BodyError(f"no {prefix} {name} found")
-            out[f"{prefix}_{name}"] = _landmark(f"{prefix}_{name}", leg(i), z[i])
+            out[f"{prefix}_{name}"] = _landmark(f"{prefix}_{name}", legs[i], z[i])
     # arms: vertices beyond the trunk at armpit height
     from shapely.geometry import Point, Polygon
 

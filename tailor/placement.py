@@ -53,7 +53,6 @@ def _wrap(uv, anchor, lm, placement, share):
     edges = np.arange(lo, hi + 0.01, 0.01)
     band = np.clip(np.searchsorted(edges, rel[:, 1]) - 1, 0, max(len(edges) - 2, 0))
     width = np.zeros(max(len(edges) - 1, 1))
-    np.maximum.at(width, band, 0.0)
     for k in range(len(width)):
         members = rel[band == k, 0]
         width[k] = np.ptp(members) if len(members) > 1 else 0.0
