@@ -15,7 +15,7 @@ from numba import njit
 
 from .errors import SimulationUnstable
 
-__all__ = ["bvh_object", "self_intersections", "BodyCollider"]
+__all__ = ["bvh_object", "self_intersections", "points_inside", "BodyCollider"]
 
 
 def bvh_object(vertices, faces):
@@ -48,6 +48,78 @@ def self_intersections(vertices, faces) -> np.ndarray:
     fa, fb = faces[pairs[:, 0]], faces[pairs[:, 1]]
     shared = (fa[:, :, None] == fb[:, None, :]).any(axis=(1, 2))
     return pairs[~shared]
+
+
+@njit(cache=True)
+def _grid_triangles(xy_lo, xy_hi, origin, cell, nx, ny):
+    """CSR over an (nx, ny) grid of the triangles whose xy bounding box touches each cell."""
+    count = np.zeros(nx * ny + 1, np.int64)
+    for t in range(len(xy_lo)):
+        i0, i1 = int((xy_lo[t, 0] - origin[0]) / cell), int((xy_hi[t, 0] - origin[0]) / cell)
+        j0, j1 = int((xy_lo[t, 1] - origin[1]) / cell), int((xy_hi[t, 1] - origin[1]) / cell)
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                count[i * ny + j + 1] += 1
+    ptr = np.cumsum(count)
+    fill = ptr[:-1].copy()
+    out = np.empty(ptr[-1], np.int64)
+    for t in range(len(xy_lo)):
+        i0, i1 = int((xy_lo[t, 0] - origin[0]) / cell), int((xy_hi[t, 0] - origin[0]) / cell)
+        j0, j1 = int((xy_lo[t, 1] - origin[1]) / cell), int((xy_hi[t, 1] - origin[1]) / cell)
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                out[fill[i * ny + j]] = t
+                fill[i * ny + j] += 1
+    return ptr, out
+
+
+@njit(cache=True)
+def _upward_crossings(p, vertices, faces, ptr, tri, origin, cell, nx, ny, out):
+    for k in range(len(p)):
+        i, j = int((p[k, 0] - origin[0]) / cell), int((p[k, 1] - origin[1]) / cell)
+        if i < 0 or j < 0 or i >= nx or j >= ny:
+            continue
+        c = i * ny + j
+        n = 0
+        for m in range(ptr[c], ptr[c + 1]):
+            t = tri[m]
+            a, b, d = vertices[faces[t, 0]], vertices[faces[t, 1]], vertices[faces[t, 2]]
+            # barycentric coordinates of p's xy in the triangle's xy projection
+            det = (b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1])
+            if det == 0.0:
+                continue
+            u = ((p[k, 0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (p[k, 1] - a[1])) / det
+            v = ((b[0] - a[0]) * (p[k, 1] - a[1]) - (p[k, 0] - a[0]) * (b[1] - a[1])) / det
+            if u < 0.0 or v < 0.0 or u + v > 1.0:
+                continue
+            if a[2] + u * (b[2] - a[2]) + v * (d[2] - a[2]) > p[k, 2]:
+                n += 1
+        out[k] = n % 2 == 1
+
+
+def points_inside(points, vertices, faces, *, cell: float = 0.02) -> np.ndarray:
+    """Whether each point lies inside a closed triangle surface, shape (N,) bool.
+
+    Counts the crossings of a vertical ray from each point upwards (odd = inside), testing only
+    the triangles binned to the point's cell of an xy grid. Exact for a watertight surface; the
+    query is nudged by an irrational offset so rays do not run through edges or vertices.
+
+    >>> import trimesh
+    >>> box = trimesh.creation.box((1.0, 1.0, 1.0))
+    >>> points_inside(np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.7], [0.45, -0.3, 0.2]]), box.vertices, box.faces).tolist()
+    [True, False, True]
+    """
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    p = np.ascontiguousarray(points, dtype=np.float64) + np.array([1.2345e-9, 2.3456e-9, 0.0])
+    corners = vertices[faces][:, :, :2]
+    xy_lo, xy_hi = corners.min(axis=1), corners.max(axis=1)
+    origin = xy_lo.min(axis=0) - cell
+    nx, ny = (int((xy_hi.max(axis=0) - origin)[k] / cell) + 2 for k in range(2))
+    ptr, tri = _grid_triangles(xy_lo, xy_hi, origin, float(cell), nx, ny)
+    out = np.zeros(len(p), np.bool_)
+    _upward_crossings(p, vertices, faces, ptr, tri, origin, float(cell), nx, ny, out)
+    return out
 
 
 @njit(cache=True)
@@ -137,6 +209,7 @@ class BodyCollider:
         self._cache = None  # (frame, positions at query, ptr, tri)
         self._previous = None  # signed distance of every vertex after the last response
         self.queries = 0
+        self.queried_points = 0
 
     def _body(self, frame):
         if frame not in self._bvh:
@@ -146,41 +219,55 @@ class BodyCollider:
     def candidates(self, x, frame: int, *, cache: bool = True):
         """CSR (ptr, tri) of body triangles within ``margin`` of each vertex (FCL broad phase).
 
-        With ``cache`` the answer is reused while the same points stay within half the margin of
-        where they were asked about, on the same body frame.
+        With ``cache`` each vertex keeps its answer, on the same body frame, until it has moved
+        more than half the margin from where it was asked about; only the vertices that did are
+        asked again (sewing moves a few fast, settling and walking move most slowly).
         """
         if not np.all(np.isfinite(x)):  # FCL would crash on NaN; the guard reports instabilities
             raise SimulationUnstable("cloth positions became NaN or infinite before the body collision query; "
                                      "try a smaller time step or the implicit integrator")
         c = self._cache
-        if cache and c is not None and c[0] == frame and c[1].shape == x.shape and np.max(np.abs(x - c[1])) < 0.5 * self.margin:
-            return c[2], c[3]
-        geoms = [fcl.Sphere(self.margin) for _ in range(len(x))]
-        objs = [fcl.CollisionObject(g, fcl.Transform(p)) for g, p in zip(geoms, x)]
+        if cache and c is not None and c[0] == frame and c[1].shape == x.shape:
+            _, anchor, keys = c
+            moved = np.flatnonzero(np.max(np.abs(x - anchor), axis=1) >= 0.5 * self.margin)
+            if len(moved):
+                anchor = anchor.copy()
+                anchor[moved] = x[moved]
+                keep = ~np.isin(keys // len(self.faces), moved)
+                keys = np.union1d(keys[keep], self._query(x[moved], frame, moved))
+                self._cache = (frame, anchor, keys)
+        else:
+            keys = self._query(x, frame, np.arange(len(x)))
+            if cache:
+                self._cache = (frame, x.copy(), keys)
+        vertex = keys // len(self.faces)
+        ptr = np.concatenate([[0], np.cumsum(np.bincount(vertex, minlength=len(x)))]).astype(np.int64)
+        return ptr, keys % len(self.faces)
+
+    def _query(self, points, frame, ids):
+        """Sorted keys ``vertex · F + triangle`` of body triangles within the margin of ``points``."""
+        geoms = [fcl.Sphere(self.margin) for _ in range(len(points))]
+        objs = [fcl.CollisionObject(g, fcl.Transform(p)) for g, p in zip(geoms, points)]
         index = {id(g): i for i, g in enumerate(geoms)}
         manager = fcl.DynamicAABBTreeCollisionManager()
         manager.registerObjects(objs)
         manager.setup()
-        request = fcl.CollisionRequest(num_max_contacts=64 * len(x) + 1000, enable_contact=True)
+        request = fcl.CollisionRequest(num_max_contacts=64 * len(points) + 1000, enable_contact=False)
         data = fcl.CollisionData(request=request)
         manager.collide(self._body(frame), data, fcl.defaultCollisionCallback)
-        pairs = []
+        vertex, tri = [], []
         for contact in data.result.contacts:
             i = index.get(id(contact.o1))
             if i is None:
-                pairs.append((index[id(contact.o2)], contact.b1))
+                vertex.append(index[id(contact.o2)])
+                tri.append(contact.b1)
             else:
-                pairs.append((i, contact.b2))
+                vertex.append(i)
+                tri.append(contact.b2)
         self.queries += 1
-        if pairs:
-            p = np.unique(np.array(pairs, dtype=np.int64), axis=0)
-            ptr = np.concatenate([[0], np.cumsum(np.bincount(p[:, 0], minlength=len(x)))]).astype(np.int64)
-            tri = p[:, 1].copy()
-        else:
-            ptr, tri = np.zeros(len(x) + 1, np.int64), np.zeros(0, np.int64)
-        if cache:
-            self._cache = (frame, x.copy(), ptr, tri)
-        return ptr, tri
+        self.queried_points += len(points)
+        ids = np.asarray(ids, np.int64)
+        return np.unique(ids[np.asarray(vertex, np.int64)] * len(self.faces) + np.asarray(tri, np.int64))
 
     def nearest(self, x, body_x, frame: int, *, cache: bool = True):
         """Signed distance [m] (positive outside), triangle, barycentrics and normal per vertex.

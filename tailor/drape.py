@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .collide import BodyCollider
+from .collide import BodyCollider, points_inside
 from .errors import SimulationError
 from .fabric import Fabric, preset
 from .forces import total_forces
@@ -39,6 +39,15 @@ NEAR_SEAM = 0.08
 
 NEAR_RATE = 80000.0
 """Their rate k [1/s²] (Eq. 15's k·η folded in): strong enough to stretch a waistband into place."""
+
+SEWING_FRICTION = 0.0
+"""Fraction of the fabric's friction acting while sewing (panels slide into place)."""
+
+STRAGGLERS = 0.02
+"""After ¾ of the sewing time-out, when at most this fraction of pairs is still open, ..."""
+
+STRAGGLER_REACH = 4.0
+"""... pairs closer than this many mesh resolutions are merged where they are."""
 
 log = logging.getLogger(__name__)
 
@@ -134,7 +143,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     mesh = discretise(pattern, resolution)
     n = mesh.vertex_count
     landmarks = find_landmarks(body.vertices, body.faces)
-    x0 = place_panels(pattern, mesh, landmarks)
+    x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, body.frames[0], body.faces))
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
     unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY)
     mass = np.asarray(unwelded.vertex_mass)
@@ -182,8 +191,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         bx, bv, k = body_state(state.t)
         if sim["attach"] is not None:
             sim["attach"].apply(state, bx, bv)
-        deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness,
-                                                      friction=sim["friction"]))
+        # sewing is assembly: panels slide over the body into place without friction
+        mu = sim["friction"] if sim["gravity"] else sim["friction"] * SEWING_FRICTION
+        deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness, friction=mu))
 
     def forces(model_, state):
         return sewing.forces(model_, state, sim["weld"], total_forces(model_, state))
@@ -234,6 +244,10 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         sew_frames += 1
         if t >= 0.5 * sew_timeout:  # stragglers held apart by two seams at a corner: Eq. 16's d grows
             sewing.merge_distance = max(sewing.merge_distance, 0.6 * resolution)
+        if t >= 0.75 * sew_timeout and sewing.open_count <= max(2, STRAGGLERS * len(sewing.pairs)):
+            # the last few pairs caught on the body (an underarm corner behind the arm): stitch them
+            # where they are, as a tailor would, if they are within a few triangles of each other
+            sewing.merge_distance = max(sewing.merge_distance, STRAGGLER_REACH * resolution)
         if sewing.close(state.x[sim["weld"]]):
             state = rebuild(state.x, state.v)
             state.t = t
@@ -244,12 +258,15 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     if sewing.open_count:
         gaps = np.where(sewing.merged, 0.0, sewing.gaps(state.x[sim["weld"]]))
         w = int(np.argmax(gaps))
-        i, j = sewing.pairs[w]
+        seam = pattern.seams[mesh.seam_pair_seam[w]]
+
+        def side(sd):
+            return f"{sd.panel}" + (f" hole {sd.hole}" if sd.hole is not None else "") + f" edge {sd.edge}"
+
         raise SimulationError(
-            f"{pattern.source}: {sewing.open_count} of {len(sewing.pairs)} seam vertex pairs are still open after "
-            f"{sew_timeout:g} s of sewing (widest gap {gaps[w] * 100:.1f} cm, between panels "
-            f"{mesh.panel_names[mesh.vertex_panel[i]]} and {mesh.panel_names[mesh.vertex_panel[j]]}); "
-            f"check the stitches and placements, or allow more time (--sew-timeout)"
+            f"{pattern.source}: pattern.stitches[{seam.index}]: {sewing.open_count} of {len(sewing.pairs)} seam vertex "
+            f"pairs are still open after {sew_timeout:g} s of sewing (widest gap {gaps[w] * 100:.1f} cm, on the stitch "
+            f"{side(seam.a)} to {side(seam.b)}); check that stitch and the placements, or allow more time (--sew-timeout)"
         )
     report["phases"]["sewing"] = {"simulated_s": t, "frames": sew_frames, "wall_s": time.perf_counter() - t0,
                                   "max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": sim["rebuilds"]}

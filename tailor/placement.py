@@ -37,7 +37,7 @@ def _frame(landmark):
     return axis, front, left
 
 
-def _wrap(uv, anchor, lm, placement, share):
+def _wrap(uv, anchor, lm, placement, share, inside=None):
     axis, front, left = _frame(lm)
     is_trunk = abs(axis[2]) > 0.9 and lm.width > 0 and lm.depth > 0
     if is_trunk:
@@ -67,13 +67,61 @@ def _wrap(uv, anchor, lm, placement, share):
     unit = np.column_stack([a * np.sin(phi), b * np.cos(phi)])
     arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(unit, axis=0).T))])
     s0 = np.interp(placement.angle % (2.0 * math.pi), phi, arc)
-    ang = np.interp((s0 + rel[:, 0] / grow) % arc[-1], arc, phi)
-    radial = np.outer(grow * a * np.sin(ang), left) + np.outer(grow * b * np.cos(ang), front)
     height = rel[:, 1] + placement.offset
-    return np.asarray(lm.center) + radial + np.outer(height, axis)
+
+    def place(scale):
+        """Rows rolled isometrically onto the ellipse scaled by ``scale`` (per vertex)."""
+        ang = np.interp((s0 + rel[:, 0] / scale) % arc[-1], arc, phi)
+        radial = (scale * a * np.sin(ang))[:, None] * left + (scale * b * np.cos(ang))[:, None] * front
+        return np.asarray(lm.center) + radial + np.outer(height, axis), radial
+
+    x, _ = place(np.full(len(uv), grow))
+    if inside is None:
+        return x
+    # The landmark's cylinder fits its own cross-section, not the body above or below it (a
+    # trouser leg rolled round the thigh runs into the hips): rows that would start inside the
+    # body, or closer than the clearance, are rolled onto wider cylinders, still isometric along
+    # each row, with the radius changing by at most half the height between rows.
+    factors = np.linspace(1.0, 3.0, 21)
+    bands = len(width)
+    bad = np.zeros((len(factors), bands), bool)
+    for k, factor in enumerate(factors):
+        xk, radial = place(np.full(len(uv), grow * factor))
+        probe = xk - clearance * radial / np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-12)
+        bad[k] = np.bincount(band, weights=inside(probe).astype(float), minlength=bands) > 0
+        if not bad[k].any():
+            break
+    clear = np.where(bad[: k + 1].all(axis=0), k, np.argmin(bad[: k + 1], axis=0))
+    f = factors[clear]
+    if np.all(f == 1.0):
+        return x
+    step = 0.5 * 0.01 / (grow * min(a, b))
+    for k in range(1, bands):
+        f[k] = max(f[k], f[k - 1] - step)
+    for k in range(bands - 2, -1, -1):
+        f[k] = max(f[k], f[k + 1] - step)
+    return place(grow * f[band])[0]
 
 
-def place_panels(pattern, mesh, landmarks=None) -> np.ndarray:
+def _clear_rigid(x, placement, inside, body_axis, clearance=0.01, reach=0.3):
+    """Move a rigidly placed panel out of the body along its normal, the least that clears it.
+
+    Patterns placed for another body (GarmentCode's, made for its own mannequin) may cut into
+    this one; the panel is slid away from the body's vertical axis, in 5 mm steps up to
+    ``reach``, until no point ``clearance`` behind it is inside.
+    """
+    normal = np.asarray(placement.rotation, float)[:, 2]
+    outward = np.append(x.mean(axis=0)[:2] - body_axis, 0.0)
+    if normal @ outward < 0:
+        normal = -normal
+    for shift in np.arange(0.0, reach + 1e-9, 0.005):
+        moved = x + shift * normal
+        if not inside(moved - clearance * normal).any():
+            return moved
+    return x
+
+
+def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
     """Initial 3D positions [m], shape (N, 3), of every mesh vertex from its panel's placement.
 
     Parameters
@@ -82,6 +130,9 @@ def place_panels(pattern, mesh, landmarks=None) -> np.ndarray:
     mesh : GarmentMesh
     landmarks : dict of name → Landmark, optional
         Needed by body-relative placements (:func:`tailor.measure.find_landmarks`).
+    inside : callable ``inside(points) -> (n,) bool``, optional
+        Whether points lie inside the body (:func:`tailor.collide.points_inside`); rows of a
+        rolled panel that would start inside it are rolled on wider cylinders.
 
     Raises
     ------
@@ -89,6 +140,9 @@ def place_panels(pattern, mesh, landmarks=None) -> np.ndarray:
         A panel without a placement, or a landmark placement without a body.
     """
     x = np.zeros((mesh.vertex_count, 3))
+    body_axis = np.zeros(2)
+    if landmarks:
+        body_axis = np.mean([np.asarray(lm.center)[:2] for lm in landmarks.values()], axis=0)
     counts: dict = {}  # panels side by side around a landmark: distinct angles (bands stack vertically)
     for p in pattern.panels:
         if isinstance(p.placement, LandmarkPlacement):
@@ -101,7 +155,7 @@ def place_panels(pattern, mesh, landmarks=None) -> np.ndarray:
         if pl is None:
             pattern.fail(panel.where(), "the panel has no placement (give 'placement' or 'translation'/'rotation')")
         if isinstance(pl, TransformPlacement):
-            x[ids] = pl.apply(uv)
+            x[ids] = pl.apply(uv) if inside is None else _clear_rigid(pl.apply(uv), pl, inside, body_axis)
             continue
         if landmarks is None:
             raise PatternError(f"{pattern.source}: {panel.where()}.placement: a landmark placement needs a body")
@@ -110,5 +164,5 @@ def place_panels(pattern, mesh, landmarks=None) -> np.ndarray:
         lo, hi = uv.min(axis=0), uv.max(axis=0)
         anchor = np.array(pl.anchor) if pl.anchor is not None else np.array([0.5 * (lo[0] + hi[0]), hi[1]])
         share = 1.0 / counts[pl.landmark]
-        x[ids] = _wrap(uv, anchor, lm, pl, share)
+        x[ids] = _wrap(uv, anchor, lm, pl, share, inside)
     return x
