@@ -40,6 +40,12 @@ NEAR_SEAM = 0.08
 NEAR_RATE = 80000.0
 """Their rate k [1/s²] (Eq. 15's k·η folded in): strong enough to stretch a waistband into place."""
 
+COMPRESSION = 0.1
+"""Fraction of the stretch stiffness resisting compression in garments (eased seams gather)."""
+
+SEWING_MAX_STRETCH = 10.0
+"""Sewing is assembly: a corner pulled three ways may stretch its triangles this far before merging."""
+
 SEWING_FRICTION = 0.0
 """Fraction of the fabric's friction acting while sewing (panels slide into place)."""
 
@@ -145,7 +151,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     landmarks = find_landmarks(body.vertices, body.faces)
     x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, body.frames[0], body.faces))
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
-    unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY)
+    unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)
     mass = np.asarray(unwelded.vertex_mass)
     friction_of = np.array([fabrics[p].friction for p in mesh.vertex_panel])
     sewing = Sewing(mesh.seam_pairs, merge_distance=max(0.3 * resolution, 0.002))
@@ -165,7 +171,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         x_orig, v_orig = state_x[old], state_v[old]
         new = sewing.weld_map(n)
         xw, vw = merge_state(x_orig, v_orig, mass, new)
-        m = build_model(mesh, fabrics, air_density=AIR_DENSITY, weld=new,
+        m = build_model(mesh, fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
                         gravity=(0.0, 0.0, -9.80665) if sim["gravity"] else (0.0, 0.0, 0.0))
         if len(sim["pins"]):
             m = m.with_pins(np.unique(new[sim["pins"]]))
@@ -212,7 +218,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             sim["model"] = replace(m, pair_stiffness=k, pair_damping=c)
         # sewing is assembly, not physics: corners pulled three ways may stretch far until merged
         # and relaxed, so the guard is looser until the body starts moving; then it watches for growth
-        guard = Guard(max_stretch=6.0) if sim["motion_start"] is None else Guard(max_stretch=sim["motion_limit"])
+        guard = Guard(max_stretch=SEWING_MAX_STRETCH) if sim["motion_start"] is None else Guard(max_stretch=sim["motion_limit"])
         dt = motion_dt if sim["motion_start"] is not None else None
         for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
                                 hooks=[hook], forces=forces, guard=guard, dt=dt):

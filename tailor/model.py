@@ -91,6 +91,9 @@ class Model:
         Derived parameters of each panel's fabric (for reports).
     curves : tuple of KawabataCurves or None
         Per panel, measured curves that replace the linear law (:mod:`tailor.forces.kawabata`).
+    compression : float
+        Fraction of the warp/weft stretch stiffness that resists compression (1 = Carignan's
+        symmetric law; woven cloth buckles instead of shortening, so draping uses less).
     """
 
     rest_uv: np.ndarray
@@ -125,6 +128,7 @@ class Model:
     elastic: str = "membrane"
     params: tuple = field(default=(), repr=False)
     curves: tuple = field(default=(), repr=False)
+    compression: float = 1.0
 
     @property
     def vertex_count(self) -> int:
@@ -145,6 +149,11 @@ class Model:
     def has_curves(self) -> bool:
         """Whether any panel follows measured Kawabata curves."""
         return any(c is not None for c in self.curves)
+
+    @property
+    def strain_dependent(self) -> bool:
+        """Whether the membrane stiffness depends on the strain (Kawabata curves or softer compression)."""
+        return self.has_curves or self.compression < 1.0
 
     @property
     def total_mass(self) -> float:
@@ -323,6 +332,7 @@ def build_model(
     safety: float = SAFETY,
     pinned=None,
     weld=None,
+    compression: float = 1.0,
 ) -> Model:
     """Build the fixed simulation model of a discretised garment.
 
@@ -350,6 +360,8 @@ def build_model(
         Index of each mesh vertex in a welded garment (sewn seams: Carignan Eq. 16–18). Welded
         vertices are one particle with the summed mass; each triangle keeps its panel's rest shape,
         and triangles that now meet across a seam get bending hinges there too.
+    compression : float
+        Fraction of the warp/weft stiffness acting in compression, in (0, 1].
 
     Returns
     -------
@@ -357,6 +369,8 @@ def build_model(
     """
     if elastic not in ELASTIC_MODELS:
         raise ValueError(f"elastic model must be one of {ELASTIC_MODELS}, got {elastic!r}")
+    if not 0.0 < compression <= 1.0:
+        raise ValueError(f"compression must be in (0, 1], got {compression!r}")
     if not damping >= 0:
         raise FabricError(f"damping must be >= 0, got {damping!r}")
     panel_count = len(mesh.panel_names)
@@ -467,6 +481,7 @@ def build_model(
         elastic=elastic,
         params=params,
         curves=curves,
+        compression=float(compression),
     )
 
 

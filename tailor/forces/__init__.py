@@ -46,7 +46,8 @@ def internal_forces(model, state, out=None) -> np.ndarray:
     if model.elastic == "springs":
         spring_forces(model, state, out)
     else:
-        membrane_forces_into(model, state, out, stiffness=secant_membrane_stiffness(model, state.x) if curves else None)
+        membrane_forces_into(model, state, out,
+                             stiffness=secant_membrane_stiffness(model, state.x) if model.strain_dependent else None)
     if model.has_bending:
         bending_forces_into(model, state, out, stiffness=secant_hinge_stiffness(model, state.x) if curves else None)
     if len(model.pair_vertices):

@@ -121,7 +121,7 @@ def jacobian_data(model, state, pattern: SparsePattern):
     cdata = np.zeros(pattern.nnz)
     curves = model.has_curves  # Kawabata: secant stiffness in the Newton step too
     membrane_jacobian_into(model, state.x, pattern.positions[0], kdata, cdata,
-                           stiffness=secant_membrane_stiffness(model, state.x) if curves else None)
+                           stiffness=secant_membrane_stiffness(model, state.x) if model.strain_dependent else None)
     if model.has_bending:
         bending_jacobian_into(model, state.x, pattern.positions[1], kdata,
                               stiffness=secant_hinge_stiffness(model, state.x) if curves else None)
@@ -156,9 +156,7 @@ def jacobian_blocks(model, state, pattern: SparsePattern):
         k_parts = [_spring_blocks(model, x, True).reshape(-1)]
         c_parts = [_spring_blocks(model, x, False).reshape(-1)]
     else:
-        k_parts = [
-            _membrane_blocks(model, x, model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear, True).reshape(-1)
-        ]
+        k_parts = [_membrane_blocks(model, x, *secant_membrane_stiffness(model, x), True).reshape(-1)]
         c_parts = [
             _membrane_blocks(model, x, model.face_damping_warp, model.face_damping_weft, model.face_damping_shear, False).reshape(-1)
         ]

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry import hinge_angles
-from .membrane import green_strain
+from .membrane import green_strain, stretch_stiffness
 
 __all__ = ["curve_secant", "secant_membrane_stiffness", "secant_hinge_stiffness"]
 
@@ -37,10 +37,10 @@ def curve_secant(curve, deformation) -> np.ndarray:
 
 def secant_membrane_stiffness(model, x):
     """(η₁₁, η₂₂, η₁₂) per face [N/m] at positions ``x``: the model's own, or from its curves."""
-    k1, k2, k12 = (np.array(model.face_stretch_warp), np.array(model.face_stretch_weft), np.array(model.face_stretch_shear))
+    e11, e22, e12 = green_strain(model, x)
+    k1, k2, k12 = (np.array(a, dtype=float) for a in stretch_stiffness(model, e11, e22))
     if not model.has_curves:
         return k1, k2, k12
-    e11, e22, e12 = green_strain(model, x)
     for panel, curves in enumerate(model.curves):
         if curves is None:
             continue

@@ -27,6 +27,7 @@ __all__ = [
     "damping_forces",
     "dissipation",
     "membrane_gradients",
+    "stretch_stiffness",
 ]
 
 
@@ -57,10 +58,26 @@ def green_strain(model, x):
     return 0.5 * (_dot(c1, c1) - 1.0), 0.5 * (_dot(c2, c2) - 1.0), 0.5 * _dot(c1, c2)
 
 
+def stretch_stiffness(model, e11, e22):
+    """(η₁₁, η₂₂, η₁₂) per face [N/m] at strains E₁₁, E₂₂: the model's, softened where compressed.
+
+    With ``model.compression`` = c < 1 a shortened warp or weft (E < 0) resists with c·η: the
+    energy ½cηE² joins ½ηE² with equal slope at E = 0, so forces stay continuous and remain its
+    exact gradient. Woven cloth shortened along a yarn buckles out of plane (bending takes over)
+    long before the yarns compress, which is what lets a gathered seam or an eased waist fold.
+    """
+    k1, k2, k12 = model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear
+    if model.compression < 1.0:
+        k1 = np.where(e11 < 0.0, model.compression * k1, k1)
+        k2 = np.where(e22 < 0.0, model.compression * k2, k2)
+    return k1, k2, k12
+
+
 def stretch_energy(model, state) -> float:
     """Elastic stretch energy Σ A·½(η₁₁E₁₁² + η₂₂E₂₂² + 2η₁₂E₁₂²) [J]."""
     e11, e22, e12 = green_strain(model, state.x)
-    w = model.face_stretch_warp * e11**2 + model.face_stretch_weft * e22**2 + 2.0 * model.face_stretch_shear * e12**2
+    k1, k2, k12 = stretch_stiffness(model, e11, e22)
+    w = k1 * e11**2 + k2 * e22**2 + 2.0 * k12 * e12**2
     return float(0.5 * np.dot(model.face_rest_area, w))
 
 
@@ -91,9 +108,8 @@ def stretch_forces(model, state, out=None) -> np.ndarray:
     e11 = 0.5 * (_dot(c1, c1) - 1.0)
     e22 = 0.5 * (_dot(c2, c2) - 1.0)
     e12 = 0.5 * _dot(c1, c2)
-    return _scatter_stress(
-        model, c1, c2, model.face_stretch_warp * e11, model.face_stretch_weft * e22, model.face_stretch_shear * e12, out
-    )
+    k1, k2, k12 = stretch_stiffness(model, e11, e22)
+    return _scatter_stress(model, c1, c2, k1 * e11, k2 * e22, k12 * e12, out)
 
 
 def _strain_rate(model, c1, c2, v):
@@ -138,8 +154,9 @@ def membrane_gradients(model, x):
     e11 = 0.5 * (_dot(c1, c1) - 1.0)
     e22 = 0.5 * (_dot(c2, c2) - 1.0)
     e12 = 0.5 * _dot(c1, c2)
+    k1, k2, k12 = stretch_stiffness(model, e11, e22)
     stress = np.empty((len(c1), 2, 2))
-    stress[:, 0, 0] = model.face_stretch_warp * e11
-    stress[:, 1, 1] = model.face_stretch_weft * e22
-    stress[:, 0, 1] = stress[:, 1, 0] = model.face_stretch_shear * e12
+    stress[:, 0, 0] = k1 * e11
+    stress[:, 1, 1] = k2 * e22
+    stress[:, 0, 1] = stress[:, 1, 0] = k12 * e12
     return grads, np.stack([w1, w2], axis=2), stress

@@ -10,10 +10,13 @@ from tailor.forces.jacobian import SparsePattern, force_jacobians, jacobian_bloc
 RNG = np.random.default_rng(11)
 
 
-@pytest.fixture(scope="module")
-def deformed():
+@pytest.fixture(scope="module", params=[1.0, 0.1], ids=["symmetric", "soft-compression"])
+def deformed(request):
+    from dataclasses import replace
+
     model, x0 = sheet(30, 20, 0.03, "denim", vertical=False)
-    x = x0 * 1.01 + RNG.normal(0, 0.005, x0.shape)
+    model = replace(model, compression=request.param)
+    x = x0 * 1.01 + RNG.normal(0, 0.005, x0.shape)  # some triangles stretched, some compressed
     return model, model.state(x, RNG.normal(0, 0.5, x0.shape))
 
 

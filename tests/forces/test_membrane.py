@@ -78,6 +78,23 @@ def test_uniaxial_tension_follows_the_green_strain_law():
     assert f[right, 1].sum() == pytest.approx(0, abs=1e-9 * expected)
 
 
+@pytest.mark.parametrize("c", [1.0, 0.3, 0.05])
+def test_compression_is_softened_by_the_requested_fraction(c):
+    from dataclasses import replace
+
+    model, x0 = sheet(10, 10, 0.02, "cotton", vertical=False, grain=0)
+    model = replace(model, compression=c)
+    right = model.rest_uv[:, 0] > 0.1 - 1e-9
+    pull = stretch_forces(model, model.state(x0 * [1.04, 1.0, 1.0]))[right, 0].sum()
+    push = stretch_forces(model, model.state(x0 * [0.96, 1.0, 1.0]))[right, 0].sum()
+    # first Piola traction s·k·E per unit rest width: tension keeps η, compression gets c·η
+    e_pull, e_push = 0.5 * (1.04**2 - 1), 0.5 * (0.96**2 - 1)
+    assert pull == pytest.approx(-1.04 * model.face_stretch_warp[0] * e_pull * 0.10, rel=1e-9)
+    assert push == pytest.approx(-0.96 * c * model.face_stretch_warp[0] * e_push * 0.10, rel=1e-9)
+    state = model.state(x0 * [0.97, 1.02, 1.0] + RNG.normal(0, 0.002, x0.shape))
+    assert_minus_gradient(stretch_energy, stretch_forces, model, state)
+
+
 def test_warp_and_weft_have_their_own_stiffness():
     jersey = preset("jersey")  # stretch 8 % warp, 15 % weft
     model, x0 = sheet(10, 10, 0.02, jersey, vertical=False, grain=90)  # warp along y
