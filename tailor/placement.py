@@ -20,7 +20,10 @@ import numpy as np
 from .errors import PatternError
 from .pattern import LandmarkPlacement, TransformPlacement
 
-__all__ = ["place_panels"]
+__all__ = ["place_panels", "SLOPE"]
+
+SLOPE = 0.1
+"""Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
 
 
 def _frame(landmark):
@@ -80,14 +83,14 @@ def _wrap(uv, anchor, lm, placement, share, inside=None):
         return x
     # The landmark's cylinder fits its own cross-section, not the body above or below it (a
     # trouser leg rolled round the thigh runs into the hips): rows that would start inside the
-    # body, or closer than the clearance, are rolled onto wider cylinders, still isometric along
-    # each row, with the radius changing by at most half the height between rows.
+    # body, or closer than half the clearance, are rolled onto wider cylinders, still isometric
+    # along each row, the factor growing and shrinking gently from row to row.
     factors = np.linspace(1.0, 3.0, 21)
     bands = len(width)
     bad = np.zeros((len(factors), bands), bool)
     for k, factor in enumerate(factors):
         xk, radial = place(np.full(len(uv), grow * factor))
-        probe = xk - clearance * radial / np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-12)
+        probe = xk - 0.5 * clearance * radial / np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-12)
         bad[k] = np.bincount(band, weights=inside(probe).astype(float), minlength=bands) > 0
         if not bad[k].any():
             break
@@ -95,7 +98,9 @@ def _wrap(uv, anchor, lm, placement, share, inside=None):
     f = factors[clear]
     if np.all(f == 1.0):
         return x
-    step = 0.5 * 0.01 / (grow * min(a, b))
+    # a row rolled wider moves its points along the circumference by |s|·Δf/f: keep that and the
+    # radius change below SLOPE per unit height, so the columns stay within ~1 % of their length
+    step = SLOPE * 0.01 / max(float(np.abs(rel[:, 0]).max()), grow * max(a, b))
     for k in range(1, bands):
         f[k] = max(f[k], f[k - 1] - step)
     for k in range(bands - 2, -1, -1):

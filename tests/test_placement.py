@@ -1,0 +1,71 @@
+"""Placing panels around the body: out of it, at their clearance, without straining them."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from tailor import find_landmarks, read_pattern
+from tailor.collide import BodyCollider, points_inside
+from tailor.mesh import discretise
+from tailor.placement import place_panels
+
+PANELS = Path(__file__).resolve().parents[1] / "panels"
+
+
+def test_points_inside_matches_a_sphere():
+    sphere = trimesh.creation.icosphere(subdivisions=4, radius=0.3)
+    rng = np.random.default_rng(3)
+    p = rng.uniform(-0.5, 0.5, (4000, 3))
+    r = np.linalg.norm(p, axis=1)
+    inside = points_inside(p, sphere.vertices, sphere.faces)
+    sure = np.abs(r - 0.3) > 0.003  # the polyhedron lies within 3 mm of the sphere
+    assert np.array_equal(inside[sure], (r < 0.3)[sure])
+
+
+def _edge_ratios(mesh, x):
+    e = np.concatenate([mesh.faces[:, [0, 1]], mesh.faces[:, [1, 2]], mesh.faces[:, [2, 0]]])
+    rest = np.linalg.norm(mesh.uv[e[:, 0]] - mesh.uv[e[:, 1]], axis=1)
+    return np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1) / rest
+
+
+@pytest.mark.parametrize("name", ["trousers", "dress", "tshirt", "skirt"])
+def test_rolled_panels_start_outside_the_body_nearly_unstrained(name, mannequin):
+    pattern = read_pattern(PANELS / f"{name}.json")
+    mesh = discretise(pattern, 0.03)
+    marks = find_landmarks(mannequin.vertices, mannequin.faces)
+    body_inside = lambda p: points_inside(p, mannequin.vertices, mannequin.faces)  # noqa: E731
+    x = place_panels(pattern, mesh, marks, inside=body_inside)
+    assert not body_inside(x).any()
+    dist = BodyCollider(mannequin.frames, mannequin.faces, margin=0.01).nearest(x, mannequin.vertices, 0, cache=False)[0]
+    assert np.all(dist > 0.0)  # nothing closer than 1 cm lies inside either
+    ratio = _edge_ratios(mesh, x)
+    # rows are rolled isometrically; rows rolled wider than their neighbours shear the panel by
+    # at most SLOPE = 0.1, which changes diagonal edges by at most ±5 %; chords of 3 cm edges
+    # rolled round a 5 cm arm are another 1.5 % shorter than their arcs
+    assert ratio.min() > 0.93 and ratio.max() < 1.055
+
+
+def test_trouser_legs_rolled_round_the_thighs_would_cut_into_the_hips(mannequin):
+    pattern = read_pattern(PANELS / "trousers.json")
+    mesh = discretise(pattern, 0.03)
+    marks = find_landmarks(mannequin.vertices, mannequin.faces)
+    naive = place_panels(pattern, mesh, marks)
+    assert points_inside(naive, mannequin.vertices, mannequin.faces).sum() > 50  # what the check fixes
+
+
+def test_rigidly_placed_panels_slide_out_of_the_body(garmentcode_dir, mannequin):
+    pattern = read_pattern(garmentcode_dir / "skirt_circle_specification.json")  # made for another body
+    mesh = discretise(pattern, 0.03)
+    marks = find_landmarks(mannequin.vertices, mannequin.faces)
+    body_inside = lambda p: points_inside(p, mannequin.vertices, mannequin.faces)  # noqa: E731
+    naive = place_panels(pattern, mesh, marks)
+    x = place_panels(pattern, mesh, marks, inside=body_inside)
+    assert body_inside(naive).any() and not body_inside(x).any()
+    for pi in range(len(pattern.panels)):
+        ids = mesh.panel_vertices(pi)
+        shift = x[ids] - naive[ids]
+        assert np.allclose(shift, shift[0], atol=1e-12)  # rigid: one translation per panel
+        normal = np.asarray(pattern.panels[pi].placement.rotation)[:, 2]
+        assert np.linalg.norm(np.cross(shift[0], normal)) < 1e-12  # along the panel's normal
