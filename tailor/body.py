@@ -38,6 +38,9 @@ class Body:
     name : str
     report : dict
         What normalisation detected or was told (units, up axis, facing, height).
+    rest : ndarray, shape (N, 3), optional
+        A neutral pose of the same mesh (arms and legs apart, standing still) in which a garment
+        is dressed before the motion starts; the shipped walk carries the static mannequin's.
     """
 
     frames: np.ndarray
@@ -45,6 +48,7 @@ class Body:
     fps: float = 25.0
     name: str = "body"
     report: dict = field(default_factory=dict)
+    rest: np.ndarray | None = None
 
     @property
     def vertices(self) -> np.ndarray:

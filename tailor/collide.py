@@ -244,15 +244,16 @@ class BodyCollider:
         ptr = np.concatenate([[0], np.cumsum(np.bincount(vertex, minlength=len(x)))]).astype(np.int64)
         return ptr, keys % len(self.faces)
 
-    def _query(self, points, frame, ids):
-        """Sorted keys ``vertex · F + triangle`` of body triangles within the margin of ``points``."""
-        geoms = [fcl.Sphere(self.margin) for _ in range(len(points))]
+    def _query(self, points, frame, ids, radius=None):
+        """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of ``points``."""
+        geoms = [fcl.Sphere(self.margin if radius is None else radius) for _ in range(len(points))]
         objs = [fcl.CollisionObject(g, fcl.Transform(p)) for g, p in zip(geoms, points)]
         index = {id(g): i for i, g in enumerate(geoms)}
         manager = fcl.DynamicAABBTreeCollisionManager()
         manager.registerObjects(objs)
         manager.setup()
-        request = fcl.CollisionRequest(num_max_contacts=64 * len(points) + 1000, enable_contact=False)
+        scale = 1.0 if radius is None else max(1.0, (radius / self.margin) ** 2)  # triangles per sphere grow with r²
+        request = fcl.CollisionRequest(num_max_contacts=int(64 * scale * len(points)) + 1000, enable_contact=False)
         data = fcl.CollisionData(request=request)
         manager.collide(self._body(frame), data, fcl.defaultCollisionCallback)
         vertex, tri = [], []
@@ -283,6 +284,34 @@ class BodyCollider:
         _nearest(np.ascontiguousarray(x), ptr, tri, np.ascontiguousarray(body_x), self.faces, dist, tri_out, bary, normal)
         dist[tri_out < 0] = np.inf
         return dist, tri_out, bary, normal
+
+    def rescue(self, model, state, body_x, body_v, frame: int, *, thickness: float, reach: float = 0.15) -> int:
+        """Return cloth vertices trapped inside the body to its surface; how many were moved.
+
+        :meth:`respond` trusts only contacts within half the margin, or vertices it saw cross,
+        so a vertex that arrives deep inside without crossing (a merged seam vertex at the
+        centroid of its partners round a shoulder, or one squeezed through a crease) stays
+        there. Here every vertex is tested against the closed surface (:func:`points_inside`);
+        those inside, and confirmed by the closest triangle within ``reach`` facing away, are
+        put ``thickness`` outside it at the body's velocity (inelastic, as Eq. 9–10).
+        """
+        inside = np.flatnonzero(points_inside(state.x, body_x, self.faces) & ~model.vertex_pinned)
+        if not len(inside):
+            return 0
+        keys = self._query(state.x[inside], frame, np.arange(len(inside)), radius=reach)
+        vertex = keys // len(self.faces)
+        ptr = np.concatenate([[0], np.cumsum(np.bincount(vertex, minlength=len(inside)))]).astype(np.int64)
+        n = len(inside)
+        dist, tri, bary, normal = np.full(n, np.inf), np.full(n, -1, np.int64), np.zeros((n, 3)), np.zeros((n, 3))
+        _nearest(np.ascontiguousarray(state.x[inside]), ptr, keys % len(self.faces), np.ascontiguousarray(body_x),
+                 self.faces, dist, tri, bary, normal)
+        ok = (tri >= 0) & (dist < 0.0)
+        ids, dist, tri, bary, normal = inside[ok], dist[ok], tri[ok], bary[ok], normal[ok]
+        state.x[ids] += (thickness - dist)[:, None] * normal
+        state.v[ids] = (body_v[self.faces[tri]] * bary[:, :, None]).sum(axis=1)
+        if self._previous is not None and len(self._previous) == len(state.x):
+            self._previous[ids] = thickness
+        return len(ids)
 
     def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness: float, friction):
         """Eq. 9–14 on ``state`` in place: push out to ``thickness``, cancel approach, apply friction.

@@ -1,12 +1,15 @@
 """The main job: place, sew and drape a garment on a (moving) body (Carignan §3–4).
 
-:func:`drape` runs three phases:
+:func:`drape` runs four phases:
 
 1. **sewing** — body still, gravity off (GarmentCode's zero-gravity warm-up), seaming forces
    (Eq. 15) pull the placed panels together and pairs merge (Eq. 16–18) until every seam is
    closed, or a time-out raises :class:`~tailor.errors.SimulationError` naming the open seams;
 2. **settling** — gravity on, attachments hold (Eq. 19–20), the garment comes to rest;
-3. **motion** — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
+3. **transition** — a moving body that has a neutral pose (:attr:`~tailor.body.Body.rest`, as the
+   shipped walk has) is dressed in that pose and then moves into its first frame in
+   :data:`TRANSITION` seconds, so panels are never placed round a leg in mid-stride;
+4. **motion** — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
 
 Body contact (Eq. 9–14) acts in every phase through :class:`~tailor.collide.BodyCollider`.
 Nothing here writes files: frames go to the caller (``on_frame``) and into the result.
@@ -45,6 +48,19 @@ COMPRESSION = 0.1
 
 SEWING_MAX_STRETCH = 10.0
 """Sewing is assembly: a corner pulled three ways may stretch its triangles this far before merging."""
+
+TRANSITION = 1.0
+"""Seconds a body dressed in its rest pose takes to move into the first frame of its motion."""
+
+TRANSITION_KEYS = 25
+"""Key poses (collision hierarchies) along that transition."""
+
+MOTION_MAX_STRETCH = 5.0
+"""While the body moves, a triangle stretched further than this (or than ``MOTION_STRETCH_GROWTH``
+times the dressed garment's worst) means the run has gone wrong; a hem kicked by a heel reaches 4."""
+
+MOTION_STRETCH_GROWTH = 1.5
+"""See ``MOTION_MAX_STRETCH``."""
 
 SEWING_FRICTION = 0.0
 """Fraction of the fabric's friction acting while sewing (panels slide into place)."""
@@ -148,14 +164,23 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     fabrics = {i: (p.fabric or base) for i, p in enumerate(pattern.panels)}
     mesh = discretise(pattern, resolution)
     n = mesh.vertex_count
-    landmarks = find_landmarks(body.vertices, body.faces)
-    x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, body.frames[0], body.faces))
+    # a moving body with a neutral pose is dressed in that pose, then eased into its first frame
+    moving = body.frame_count > 1
+    has_rest = moving and body.rest is not None
+    pose = body.rest if has_rest else body.frames[0]
+    keys = TRANSITION_KEYS if has_rest else 0
+    blend = [pose + (body.frames[0] - pose) * (k / keys) for k in range(1, keys + 1)]
+    landmarks = find_landmarks(pose, body.faces)
+    x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, pose, body.faces))
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
     unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)
     mass = np.asarray(unwelded.vertex_mass)
     friction_of = np.array([fabrics[p].friction for p in mesh.vertex_panel])
     sewing = Sewing(mesh.seam_pairs, merge_distance=max(0.3 * resolution, 0.002))
-    collider = BodyCollider(body.frames, body.faces, margin=max(0.03, 2 * thickness))
+    # collider frames: the dressing pose, the transition's key poses, then the motion
+    collider = BodyCollider(np.concatenate([pose[None], *(b[None] for b in blend), body.frames]) if keys else body.frames,
+                            body.faces, margin=max(0.03, 2 * thickness))
+    walk0 = 1 + keys if keys else 0  # collider index of motion frame 0
     integ = make_integrator(integrator)
     report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution,
               "integrator": integrator, "time_step_eq24_s": unwelded.time_step, "phases": {}, "seam_pairs": len(sewing.pairs),
@@ -163,7 +188,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
               "active": {"bending": unwelded.has_bending, "air": True, "body_collision": True, "self_collision": False}}
     sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
-           "attach": None, "motion_start": None, "rebuilds": 0}
+           "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0}
 
     def rebuild(state_x, state_v):
         """Weld the merged pairs into one particle each and carry the state over (Eq. 17–18)."""
@@ -184,12 +209,19 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         return m.state(xw, vw, 0.0)
 
     def body_state(t):
-        start = sim["motion_start"]
-        if start is None or body.frame_count == 1:
-            return body.frames[0], np.zeros_like(body.frames[0]), 0
+        """Body positions, velocities and collider frame at time ``t``."""
+        ease, start = sim["transition_start"], sim["motion_start"]
+        if ease is None or (start is None and not keys):
+            return pose, np.zeros_like(pose), 0
+        if start is None:  # transition: rest pose → first frame at constant speed
+            a = min(max((t - ease) / TRANSITION, 0.0), 1.0)
+            return (pose + a * (body.frames[0] - pose), (body.frames[0] - pose) / TRANSITION,
+                    1 + min(keys - 1, int(a * keys)))
+        if not moving:
+            return pose, np.zeros_like(pose), 0
         tb = max(0.0, t - start)
         bx, bv = body.at(tb)
-        return bx, bv, int(round(tb * body.fps)) % body.frame_count
+        return bx, bv, walk0 + int(round(tb * body.fps)) % body.frame_count
 
     deepest = [0.0]
 
@@ -205,7 +237,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         return sewing.forces(model_, state, sim["weld"], total_forces(model_, state))
 
     # while the body moves, no body point may travel more than half the contact margin in one step
-    body_speed = float(np.abs(np.diff(body.frames, axis=0)).max() * body.fps) if body.frame_count > 1 else 0.0
+    body_speed = float(np.abs(np.diff(body.frames, axis=0)).max() * body.fps) if moving else 0.0
+    if keys:
+        body_speed = max(body_speed, float(np.abs(body.frames[0] - pose).max()) / TRANSITION)
     motion_dt = min(0.01, 0.5 * collider.margin / body_speed) if body_speed > 0 else None
 
     def advance(state, duration):
@@ -218,13 +252,20 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             sim["model"] = replace(m, pair_stiffness=k, pair_damping=c)
         # sewing is assembly, not physics: corners pulled three ways may stretch far until merged
         # and relaxed, so the guard is looser until the body starts moving; then it watches for growth
-        guard = Guard(max_stretch=SEWING_MAX_STRETCH) if sim["motion_start"] is None else Guard(max_stretch=sim["motion_limit"])
-        dt = motion_dt if sim["motion_start"] is not None else None
+        moving_now = sim["transition_start"] is not None
+        guard = Guard(max_stretch=sim["motion_limit"]) if moving_now else Guard(max_stretch=SEWING_MAX_STRETCH)
+        dt = motion_dt if moving_now else None
         for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
                                 hooks=[hook], forces=forces, guard=guard, dt=dt):
             continue
         last.t = t + duration
+        rescue(last)
         return last
+
+    def rescue(state):
+        """Once a frame (and after every merge): vertices trapped inside the body go back out."""
+        bx, bv, k = body_state(state.t)
+        sim["rescued"] += collider.rescue(sim["model"], state, bx, bv, k, thickness=thickness)
 
     out_frames, body_frames = [], []
 
@@ -257,8 +298,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         if sewing.close(state.x[sim["weld"]]):
             state = rebuild(state.x, state.v)
             state.t = t
+            rescue(state)
         if record_sewing:
-            emit(state, body.frames[0])
+            emit(state, pose)
         if progress:
             progress("sewing", len(sewing.pairs) - sewing.open_count, len(sewing.pairs))
     if sewing.open_count:
@@ -282,7 +324,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     sim["gravity"] = True
     if held:
         ids = np.unique(np.concatenate(held))
-        dist, tri, bary, _ = collider.nearest(state.x[sim["weld"][ids]], body.frames[0], 0, cache=False)
+        dist, tri, bary, _ = collider.nearest(state.x[sim["weld"][ids]], pose, 0, cache=False)
         ok = tri >= 0
         sim["pins"] = ids[ok]
     state = rebuild(state.x, state.v)
@@ -295,14 +337,23 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     for _ in range(int(round(settle * fps))):
         state = advance(state, frame_dt)
         if record_sewing:
-            emit(state, body.frames[0])
+            emit(state, pose)
     report["phases"]["settling"] = {"simulated_s": settle, "wall_s": time.perf_counter() - t0}
-    # 3. motion, one frame every 1/fps
+    dressed_stretch = max_stretch(sim["model"], state.x)
+    sim["motion_limit"] = max(MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH * dressed_stretch)
+    report["max_triangle_stretch_dressed"] = dressed_stretch
+    # 3. transition: a body dressed in its neutral pose moves into the first frame of its motion
+    t0 = time.perf_counter()
+    sim["transition_start"] = state.t
+    if keys:
+        for _ in range(int(round(TRANSITION * fps))):
+            state = advance(state, frame_dt)
+            if record_sewing:
+                emit(state, body_state(state.t)[0])
+        report["phases"]["transition"] = {"simulated_s": TRANSITION, "wall_s": time.perf_counter() - t0}
+    # 4. motion, one frame every 1/fps
     t0 = time.perf_counter()
     sim["motion_start"] = state.t
-    dressed_stretch = max_stretch(sim["model"], state.x)
-    sim["motion_limit"] = max(Guard().max_stretch, 1.5 * dressed_stretch)
-    report["max_triangle_stretch_dressed"] = dressed_stretch
     penetration = []
     for f in range(frames):
         if f:
@@ -321,5 +372,6 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     report["wall_s"] = time.perf_counter() - t_start
     report["body_bvh_queries"] = collider.queries
     report["max_contact_correction_m"] = deepest[0]  # deepest penetration any step had to undo
+    report["vertices_rescued_from_inside_body"] = sim["rescued"]
     report["welded_vertices"] = int(sim["model"].vertex_count)
     return DrapeResult(out_frames, body_frames, mesh, sim["weld"], body.faces, pattern, report)

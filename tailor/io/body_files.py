@@ -9,6 +9,7 @@ line naming the file. ``mannequin`` and ``mannequin-walk`` name the project's ow
 from __future__ import annotations
 
 import struct
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -71,9 +72,13 @@ def _named(name: str) -> Body:
         return Body(m.vertices[None], m.faces, 25.0, "mannequin", {"generated": True})
     f = BODIES_DIR / "mannequin_walk.npz"
     if f.exists():
-        return read_body(f)
+        walk = read_body(f)
+        rest = _named("mannequin")
+        if rest.frames.shape[1:] == walk.frames.shape[1:] and np.array_equal(rest.faces, walk.faces):
+            walk = replace(walk, rest=rest.vertices)  # dressed standing, then walks
+        return walk
     m = make_mannequin()
-    return Body(walk_cycle(m), m.faces, 25.0, "mannequin-walk", {"generated": True})
+    return Body(walk_cycle(m), m.faces, 25.0, "mannequin-walk", {"generated": True}, rest=m.vertices)
 
 
 def read_body(source, *, units: str = "auto", up: str = "auto", facing: str = "auto",

@@ -1,0 +1,24 @@
+"""Body contact helpers: trapped vertices go back out."""
+
+import numpy as np
+import trimesh
+
+from conftest import sheet
+from tailor.collide import BodyCollider
+
+
+def test_vertices_trapped_deep_inside_are_returned_to_the_surface():
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.2)
+    model, x0 = sheet(4, 4, 0.02, "cotton", vertical=False)
+    x = x0 - x0.mean(axis=0) + [0.0, 0.0, 0.25]  # above the ball ...
+    x[:3] = [[0.0, 0.0, 0.12], [0.05, 0.0, -0.1], [-0.08, 0.06, 0.02]]  # ... but three deep inside it
+    state = model.state(x, np.ones_like(x))
+    moving = ball.vertices + 0.0
+    velocity = np.tile([0.0, 0.3, 0.0], (len(moving), 1))
+    collider = BodyCollider(moving[None], ball.faces, margin=0.02)  # respond() would not see them
+    assert collider.nearest(state.x[:3], moving, 0, cache=False)[1].max() < 0
+    assert collider.rescue(model, state, moving, velocity, 0, thickness=0.003) == 3
+    r = np.linalg.norm(state.x, axis=1)
+    assert np.all(np.abs(r[:3] - 0.203) < 0.002)  # on the surface, thickness outside
+    assert np.allclose(state.v[:3], [0.0, 0.3, 0.0])  # inelastic: moving with the body
+    assert np.array_equal(state.x[3:], x[3:]) and np.all(state.v[3:] == 1.0)  # the rest untouched
