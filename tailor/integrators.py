@@ -116,14 +116,20 @@ class ImplicitEuler:
     tolerance : float
         Relative residual at which CG stops.
     max_iterations : int
+    max_halvings : int
+        A step whose CG does not converge within ``max_iterations`` is taken as two half steps
+        (M + Δt²K is better conditioned the smaller Δt is), at most this many times over.
+        ``halvings`` counts how often that happened.
     """
 
     name = "implicit"
     explicit = False
 
-    def __init__(self, tolerance: float = 1e-5, max_iterations: int = 500):
+    def __init__(self, tolerance: float = 1e-5, max_iterations: int = 500, max_halvings: int = 3):
         self.tolerance = tolerance
         self.max_iterations = max_iterations
+        self.max_halvings = max_halvings
+        self.halvings = 0
         self._pattern = None
         self._pattern_model = None
         self._warm = None
@@ -143,7 +149,7 @@ class ImplicitEuler:
             self._warm = None
         return self._pattern
 
-    def step(self, model, state, dt, forces):
+    def step(self, model, state, dt, forces, _depth: int = 0):
         pattern = self._pattern_for(model)
         n = model.vertex_count
         f = forces(model, state).reshape(-1)
@@ -167,6 +173,11 @@ class ImplicitEuler:
             pattern.indptr, pattern.cols, data, rhs, dv, 1.0 / data[pattern.diagonal_slots], self.tolerance, self.max_iterations
         )
         self.last_iterations = iterations
+        if not converged and iterations >= self.max_iterations and _depth < self.max_halvings and np.all(np.isfinite(dv)):
+            self.halvings += 1
+            self._warm = None
+            half = self.step(model, state, 0.5 * dt, forces, _depth + 1)
+            return self.step(model, half, 0.5 * dt, forces, _depth + 1)
         if not converged:
             log.warning("implicit step at t = %.4f s: CG stopped after %d iterations before reaching %.0e", state.t, iterations, self.tolerance)
         if not np.all(np.isfinite(dv)) or (not converged and iterations < self.max_iterations):

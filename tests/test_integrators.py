@@ -6,7 +6,7 @@ import pytest
 from conftest import sheet
 from tailor.errors import SimulationUnstable
 from tailor.fabric import PRESETS
-from tailor.forces import internal_forces
+from tailor.forces import internal_forces, total_forces
 from tailor.integrators import INTEGRATORS, make_integrator
 from tailor.sim import run, simulate
 from tailor.units import GRAVITY
@@ -135,3 +135,26 @@ def test_walker_mass_spring_cloth_hangs_stably_near_the_membrane():
     stretch = np.mean([-s.x[bottom, 2].mean() for s in states[-10:]])
     assert np.isfinite(states[-1].x).all()
     assert 0.01 * 0.7 < stretch < 0.01 * 1.6  # cotton: λ = 1 %
+
+
+def test_implicit_step_halves_when_cg_does_not_converge():
+    from tailor.integrators import ImplicitEuler
+
+    model, x0 = sheet(12, 12, 0.02, "denim", vertical=False)
+    rng = np.random.default_rng(5)
+    state = model.state(x0 * 1.02 + rng.normal(0, 0.002, x0.shape))
+    dt = 0.02
+
+    def iterations(h):
+        solver = ImplicitEuler(max_iterations=100000)
+        solver.step(model, state, h, total_forces)
+        return solver.last_iterations
+
+    full, half = iterations(dt), iterations(0.5 * dt)
+    assert half < full  # a smaller step is better conditioned
+    reference = ImplicitEuler(max_iterations=100000)
+    expected = reference.step(model, reference.step(model, state, 0.5 * dt, total_forces), 0.5 * dt, total_forces)
+    limited = ImplicitEuler(max_iterations=half + 2)
+    got = limited.step(model, state, dt, total_forces)
+    assert limited.halvings == 1 and got.t == pytest.approx(state.t + dt)
+    assert np.allclose(got.x, expected.x, atol=1e-9) and np.allclose(got.v, expected.v, atol=1e-6)
