@@ -263,7 +263,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         # and relaxed, so the guard is looser until the body starts moving; then it watches for growth
         moving_now = sim["transition_start"] is not None
         guard = Guard(max_stretch=sim["motion_limit"]) if moving_now else Guard(max_stretch=SEWING_MAX_STRETCH)
-        dt = motion_dt if moving_now else still_dt
+        # sewing keeps the plain implicit step: the seams must move the panels far, and do
+        dt = motion_dt if moving_now else (still_dt if sim["gravity"] else None)
         for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
                                 hooks=[hook], forces=forces, guard=guard, dt=dt):
             continue
