@@ -19,9 +19,7 @@ __all__ = ["bvh_object", "self_intersections", "points_inside", "BodyCollider"]
 
 
 def bvh_object(vertices, faces):
-    """An FCL collision object over a triangle mesh (identity transform).
-
-    """
+    """An FCL collision object over a triangle mesh (identity transform)."""
     model = fcl.BVHModel()
     model.beginModel(len(vertices), len(faces))
     model.addSubModel(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32))
@@ -206,7 +204,7 @@ class BodyCollider:
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.margin = float(margin)
         self._bvh = {}
-        self._cache = None  # (frame, positions at query, ptr, tri)
+        self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle)
         self._previous = None  # signed distance of every vertex after the last response
         self.queries = 0
         self.queried_points = 0
@@ -240,9 +238,20 @@ class BodyCollider:
             keys = self._query(x, frame, np.arange(len(x)))
             if cache:
                 self._cache = (frame, x.copy(), keys)
-        vertex = keys // len(self.faces)
-        ptr = np.concatenate([[0], np.cumsum(np.bincount(vertex, minlength=len(x)))]).astype(np.int64)
+        return self._csr(keys, len(x))
+
+    def _csr(self, keys, n):
+        """(ptr, tri) of sorted keys ``vertex · F + triangle`` over ``n`` vertices."""
+        ptr = np.concatenate([[0], np.cumsum(np.bincount(keys // len(self.faces), minlength=n))]).astype(np.int64)
         return ptr, keys % len(self.faces)
+
+    def _closest(self, x, ptr, tri, body_x):
+        """Narrow phase: signed distance, triangle (−1: none), barycentrics and normal per point."""
+        n = len(x)
+        dist, tri_out, bary, normal = np.full(n, np.inf), np.full(n, -1, np.int64), np.zeros((n, 3)), np.zeros((n, 3))
+        _nearest(np.ascontiguousarray(x), ptr, tri, np.ascontiguousarray(body_x), self.faces, dist, tri_out, bary, normal)
+        dist[tri_out < 0] = np.inf
+        return dist, tri_out, bary, normal
 
     def _query(self, points, frame, ids, radius=None):
         """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of ``points``."""
@@ -275,15 +284,7 @@ class BodyCollider:
 
         Vertices with no body triangle within the margin get triangle −1 and distance +inf.
         """
-        ptr, tri = self.candidates(x, frame, cache=cache)
-        n = len(x)
-        dist = np.full(n, np.inf)
-        tri_out = np.full(n, -1, np.int64)
-        bary = np.zeros((n, 3))
-        normal = np.zeros((n, 3))
-        _nearest(np.ascontiguousarray(x), ptr, tri, np.ascontiguousarray(body_x), self.faces, dist, tri_out, bary, normal)
-        dist[tri_out < 0] = np.inf
-        return dist, tri_out, bary, normal
+        return self._closest(x, *self.candidates(x, frame, cache=cache), body_x)
 
     def rescue(self, model, state, body_x, body_v, frame: int, *, thickness: float, reach: float = 0.15) -> int:
         """Return cloth vertices trapped inside the body to its surface; how many were moved.
@@ -299,12 +300,7 @@ class BodyCollider:
         if not len(inside):
             return 0
         keys = self._query(state.x[inside], frame, np.arange(len(inside)), radius=reach)
-        vertex = keys // len(self.faces)
-        ptr = np.concatenate([[0], np.cumsum(np.bincount(vertex, minlength=len(inside)))]).astype(np.int64)
-        n = len(inside)
-        dist, tri, bary, normal = np.full(n, np.inf), np.full(n, -1, np.int64), np.zeros((n, 3)), np.zeros((n, 3))
-        _nearest(np.ascontiguousarray(state.x[inside]), ptr, keys % len(self.faces), np.ascontiguousarray(body_x),
-                 self.faces, dist, tri, bary, normal)
+        dist, tri, bary, normal = self._closest(state.x[inside], *self._csr(keys, len(inside)), body_x)
         ok = (tri >= 0) & (dist < 0.0)
         ids, dist, tri, bary, normal = inside[ok], dist[ok], tri[ok], bary[ok], normal[ok]
         state.x[ids] += (thickness - dist)[:, None] * normal

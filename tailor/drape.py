@@ -172,7 +172,6 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     has_rest = moving and body.rest is not None
     pose = body.rest if has_rest else body.frames[0]
     keys = TRANSITION_KEYS if has_rest else 0
-    blend = [pose + (body.frames[0] - pose) * (k / keys) for k in range(1, keys + 1)]
     landmarks = find_landmarks(pose, body.faces)
     x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, pose, body.faces))
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
@@ -181,8 +180,12 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     friction_of = np.array([fabrics[p].friction for p in mesh.vertex_panel])
     sewing = Sewing(mesh.seam_pairs, merge_distance=max(0.3 * resolution, 0.002))
     # collider frames: the dressing pose, the transition's key poses, then the motion
-    collider = BodyCollider(np.concatenate([pose[None], *(b[None] for b in blend), body.frames]) if keys else body.frames,
-                            body.faces, margin=max(0.03, 2 * thickness))
+    if keys:
+        steps = np.arange(1, keys + 1)[:, None, None] / keys
+        collider_frames = np.concatenate([pose[None], pose + steps * (body.frames[0] - pose), body.frames])
+    else:
+        collider_frames = body.frames
+    collider = BodyCollider(collider_frames, body.faces, margin=max(0.03, 2 * thickness))
     walk0 = 1 + keys if keys else 0  # collider index of motion frame 0
     integ = make_integrator(integrator)
     report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution,
