@@ -1,0 +1,395 @@
+"""Cloth–cloth contact: perfectly inelastic self-collision (Carignan Eq. 5–8) over FCL.
+
+Detection (Carignan §3.4: "any triangle, including those belonging to the cloth itself, within a
+threshold distance from the cloth's vertices") runs in three stages:
+
+1. **Regions** (``mode="auto"``): the garment is cut into patches about ``patch`` metres across.
+   FCL collides their bounding boxes, inflated by the query radius, with one another. A patch
+   takes part only if it overlaps a patch that is not its neighbour or a neighbour's neighbour,
+   or if it (or it with a nearby patch) is folded: a surface whose normals all lie within 60° of
+   one direction is a height field over it and cannot come near itself except through its own
+   neighbourhood (Volino & Magnenat-Thalmann's normal-cone argument). Flat cloth is skipped.
+2. **Broad phase**: a sphere of radius ``thickness + reach`` around every active vertex is
+   collided (FCL) with a hierarchy over the active triangles (rebuilt: python-fcl cannot refit).
+   ``reach`` is ``margin`` plus three times the last step's largest relative displacement. The
+   candidates stay valid while no vertex has moved more than ``reach / 2`` relative to the
+   cloth's centroid since the query (two points then approach by less than ``reach``).
+3. **Narrow phase** (compiled): a vertex whose projection falls on a candidate triangle outside
+   its own neighbourhood (triangles touching it or its 1-ring) is a contact if it is nearer than
+   ``thickness``, if its velocity would bring it nearer within the next step, or if it crossed
+   the triangle's plane since the last step (judged by the side it was on then, and only if it
+   travelled that far relative to the triangle).
+
+Response (Eq. 5–8): the vertex p₀ and the triangle point p₁ = Σ wᵢxᵢ get equal and opposite
+impulses (p₁'s share spread over its vertices in proportion to wᵢ), so linear momentum is
+conserved exactly. Along the normal the collision is perfectly inelastic: p₀ and p₁ leave with
+the normal velocity of their centre of mass (Eq. 6–7), using the triangle point's effective mass
+1/m₁ = Σ wᵢ²/mᵢ, for which Eq. 7 holds exactly at p₁ (Carignan's interpolated m₁ misses it once
+the impulse is spread). Two deliberate departures: the sliding part loses at most μ times the
+normal change (Coulomb, as Eq. 14 for the body) instead of being cancelled too — with full
+cancellation layers glue, and a glued layer pulled by its falling neighbours tore to 5× stretch
+in the two-panel drop; and a predicted contact only has its approach slowed so that it arrives at
+``thickness`` at the end of the next step. Positions are separated to ``thickness`` with the same
+weights (the centre of mass does not move). Contacts are relaxed Gauss–Seidel style and detection
+repeats until no new contact appears.
+
+Known limit: only vertex–triangle pairs are handled (edge–edge crossings between two sheets are
+not), and nothing subdivides the step, so fast relative motion (a strip piling up on a floor at
+several m/s, 4 cm a step on a 2.5 cm mesh) still tangles.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import fcl
+import numpy as np
+import scipy.sparse as sp
+from numba import njit
+
+from ..errors import SimulationUnstable
+from .body import bvh_object, sphere_query
+
+__all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
+
+SELF_COLLISION_MODES = ("auto", "on", "off")
+FOLDED_COS = 0.5
+"""A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
+
+
+@njit(cache=True)
+def _classify(gap, closing, travelled, thickness, reach):
+    """Whether a pair at signed ``gap`` (positive on the side it was on) is a contact.
+
+    In contact: nearer than ``thickness``. Predicted: ``closing`` [m] (approach over the next step,
+    1.5× the current velocity) would bring it nearer. Crossed: behind by no more than it
+    ``travelled`` relative to the other side since the previous step (a real passage, not a plane
+    sweeping past a distant point), and within ``reach``.
+    """
+    if gap >= reach or gap < -reach:
+        return False
+    if gap >= thickness:
+        return gap - closing < thickness
+    if gap < 0.0:
+        return -gap <= travelled + thickness
+    return True
+
+
+@njit(cache=True)
+def _store(k, out_i, out_a, out_n, i0, i1, i2, i3, a0, a1, a2, a3, n):
+    out_i[k, 0], out_i[k, 1], out_i[k, 2], out_i[k, 3] = i0, i1, i2, i3
+    out_a[k, 0], out_a[k, 1], out_a[k, 2], out_a[k, 3] = a0, a1, a2, a3
+    out_n[k] = n
+
+
+@njit(cache=True)
+def _detect(x, xp, vel, dt, faces, ptr, tri, thickness, reach, out_i, out_a, out_n):
+    """Vertex–triangle contacts among the candidates; returns their count.
+
+    Each contact is a stencil of four vertices with signed weights α summing to zero, the gap
+    being (Σαᵢxᵢ)·n with ``n`` pointing to the side the vertex was on before this step (side
+    memory): vertex p over triangle abc at barycentrics (u, v, w) has α = (1, −u, −v, −w).
+    Contacts are in contact, predicted or crossed (:func:`_classify`) over ``dt``.
+    """
+    count = 0
+    for p in range(len(ptr) - 1):
+        for k in range(ptr[p], ptr[p + 1]):
+            t = tri[k]
+            a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
+            # vertex p against the face
+            e1 = x[b] - x[a]
+            e2 = x[c] - x[a]
+            n = np.cross(e1, e2)
+            nn = math.sqrt(n @ n)
+            if nn > 1e-300:
+                n = n / nn
+                d = x[p] - x[a]
+                s_prev = (xp[p] - xp[a]) @ np.cross(xp[b] - xp[a], xp[c] - xp[a])
+                s_now = d @ n
+                side = (1.0 if s_prev > 0.0 else -1.0) if s_prev != 0.0 else (1.0 if s_now >= 0.0 else -1.0)
+                d11, d12, d22 = e1 @ e1, e1 @ e2, e2 @ e2
+                den = d11 * d22 - d12 * d12
+                if den > 0.0:
+                    r1, r2 = d @ e1, d @ e2
+                    v = (d22 * r1 - d12 * r2) / den
+                    w = (d11 * r2 - d12 * r1) / den
+                    u = 1.0 - v - w
+                    if u >= 0.0 and v >= 0.0 and w >= 0.0:
+                        rv = vel[p] - (u * vel[a] + v * vel[b] + w * vel[c])
+                        moved = (x[p] - xp[p]) - (u * (x[a] - xp[a]) + v * (x[b] - xp[b]) + w * (x[c] - xp[c]))
+                        if _classify(side * s_now, -1.5 * dt * side * (rv @ n), math.sqrt(moved @ moved), thickness, reach):
+                            _store(count, out_i, out_a, out_n, p, a, b, c, 1.0, -u, -v, -w, side * n)
+                            count += 1
+    return count
+
+
+@njit(cache=True)
+def _resolve(x, vel, inv_mass, ci, ca, cn, thickness, dt, friction, sweeps):
+    """Gauss–Seidel over the contacts: separate to ``thickness``, then Eq. 5–8 on approaching pairs.
+
+    With stencil weights α (Σα = 0) every correction moves vertex i by αᵢ·imᵢ·j for one vector j,
+    so Σmᵢ·Δvᵢ = j·Σαᵢ = 0: linear momentum is conserved exactly. Returns the largest remaining
+    overlap [m].
+    """
+    worst = 0.0
+    for _ in range(sweeps):
+        worst = 0.0
+        for k in range(len(ci)):
+            n = cn[k]
+            big_w = 0.0
+            r_max = 0.0
+            gap = 0.0
+            for m in range(4):
+                i = ci[k, m]
+                big_w += ca[k, m] * ca[k, m] * inv_mass[i]
+                gap += ca[k, m] * (x[i] @ n)
+            if big_w <= 0.0:
+                continue
+            # a side held mostly by pinned vertices would fling its free one (Δv = rel/α):
+            # no vertex changes by more than the whole relative motion
+            for m in range(4):
+                r_max = max(r_max, abs(ca[k, m]) * inv_mass[ci[k, m]] / big_w)
+            big_w *= max(1.0, r_max)
+            if gap < thickness:
+                worst = max(worst, thickness - gap)
+                lam = (thickness - gap) / big_w
+                for m in range(4):
+                    i = ci[k, m]
+                    x[i] += lam * ca[k, m] * inv_mass[i] * n
+            rel = np.zeros(3)
+            for m in range(4):
+                rel += ca[k, m] * vel[ci[k, m]]
+            vn = rel @ n
+            j = np.zeros(3)
+            if gap < thickness * 1.01:
+                if vn < 0.0:  # in contact and approaching: the normal velocities meet (Eq. 7 along n) ...
+                    tang = rel - vn * n
+                    st = math.sqrt(tang @ tang)
+                    # ... and sliding loses at most μ times that (Coulomb, as Eq. 14 for the body)
+                    keep = max(0.0, 1.0 - friction * (-vn) / st) if st > 0.0 else 0.0
+                    j = -(vn * n + (1.0 - keep) * tang) / big_w
+            elif vn * dt < thickness - gap:  # would close the gap this step: arrive, do not cross
+                j = ((thickness - gap) / dt - vn) / big_w * n
+            for m in range(4):
+                i = ci[k, m]
+                vel[i] += ca[k, m] * inv_mass[i] * j
+        if worst < 1e-3 * thickness:
+            break
+    return worst
+
+
+class SelfCollider:
+    """Self-collision of one cloth mesh (module docstring).
+
+    Parameters
+    ----------
+    faces : (F, 3) int
+        Triangles of the (welded) cloth.
+    face_group : (F,) int
+        Panel of each face; patches never span two panels.
+    x : (N, 3)
+        Positions the patches are cut from [m].
+    thickness : float
+        Distance kept between the cloth and itself [m].
+    margin : float
+        Extra query radius [m]; candidates live until a vertex moves ``margin / 2``.
+    mode : {"auto", "on"}
+        ``auto`` checks only regions that can touch; ``on`` checks every vertex.
+    patch : float
+        Patch size [m] for ``auto``.
+    friction : float
+        Cloth-on-cloth Coulomb coefficient for the sliding part (``inf``: Carignan's full Eq. 7).
+    """
+
+    def __init__(self, faces, face_group, x, *, thickness: float, margin: float = 0.01, mode: str = "auto",
+                 patch: float = 0.1, friction: float = 0.4):
+        if mode not in ("auto", "on"):
+            raise ValueError(f"self-collision mode must be 'auto' or 'on', got {mode!r}")
+        self.faces = np.ascontiguousarray(faces, dtype=np.int64)
+        self.n = len(x)
+        self.thickness = float(thickness)
+        self.margin = float(margin)
+        self.friction = float(friction)
+        self.mode = mode
+        self._patches(np.asarray(face_group), np.asarray(x, float), patch)
+        e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        self._ring = np.unique(np.concatenate([e[:, 0] * self.n + e[:, 1], e[:, 1] * self.n + e[:, 0],
+                                               np.arange(self.n) * (self.n + 1)]))  # sorted keys p·N + q
+        self._anchor = None  # positions relative to the centroid at the last query
+        self._reach = self.margin  # candidates hold every pair nearer than thickness + reach at the query
+        self._ptr = np.zeros(self.n + 1, np.int64)
+        self._tri = np.zeros(0, np.int64)
+        self._x_prev = None
+        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0,
+                      "query_s": 0.0, "response_s": 0.0}
+
+    # -- regions ---------------------------------------------------------------------------------
+    def _patches(self, group, x, size):
+        centroid = x[self.faces].mean(axis=1)
+        cell = np.floor(centroid / size).astype(np.int64)
+        key = np.column_stack([group, cell])
+        _, patch = np.unique(key, axis=0, return_inverse=True)
+        patch = patch.ravel()
+        self.face_patch = patch
+        self.patch_count = int(patch.max()) + 1 if len(patch) else 0
+        self._order = np.argsort(patch, kind="stable")
+        self._starts = np.searchsorted(patch[self._order], np.arange(self.patch_count))
+        # patches sharing a vertex are neighbours
+        vp = np.column_stack([self.faces.ravel(), np.repeat(patch, 3)])
+        vp = np.unique(vp, axis=0)
+        pairs = []
+        by_vertex = np.split(vp[:, 1], np.flatnonzero(np.diff(vp[:, 0])) + 1)
+        for ps in by_vertex:
+            if len(ps) > 1:
+                i, j = np.triu_indices(len(ps), 1)
+                pairs.append(ps[i] * self.patch_count + ps[j])
+        near = np.unique(np.concatenate(pairs)) if pairs else np.zeros(0, np.int64)
+        # neighbours of neighbours too: patches whose corners merely touch are not a fold either
+        a = sp.coo_matrix((np.ones(len(near)), (near // self.patch_count, near % self.patch_count)),
+                          shape=(self.patch_count,) * 2).tocsr()
+        a = a + a.T + sp.identity(self.patch_count, format="csr")
+        a2 = (a @ a).tocoo()
+        self._adjacent = np.unique(a2.row.astype(np.int64) * self.patch_count + a2.col)
+
+    def active_faces(self, x):
+        """Faces of the patches that can touch themselves or one another (``auto``)."""
+        if self.mode == "on" or self.patch_count <= 1:
+            return np.arange(len(self.faces))
+        corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
+        lo = np.minimum.reduceat(corners.min(axis=1), self._starts)
+        hi = np.maximum.reduceat(corners.max(axis=1), self._starts)
+        e1 = corners[:, 1] - corners[:, 0]
+        e2 = corners[:, 2] - corners[:, 0]
+        fn = np.cross(e1, e2)  # area-weighted normals
+        mean = np.add.reduceat(fn, self._starts)
+        mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
+        unit = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+        cos_face = np.einsum("ij,ij->i", unit, np.repeat(mean, np.diff(np.append(self._starts, len(unit))), axis=0))
+        spread = np.arccos(np.clip(np.minimum.reduceat(cos_face, self._starts), -1.0, 1.0))  # cone half-angle
+        limit = math.acos(FOLDED_COS)
+        active = spread > limit
+        pad = self.thickness + self._reach
+        i, j = self._overlapping_boxes(lo - pad, hi + pad)
+        if len(i):
+            key = np.minimum(i, j) * self.patch_count + np.maximum(i, j)
+            adjacent = np.isin(key, self._adjacent)
+            between = np.arccos(np.clip(np.einsum("ij,ij->i", mean[i], mean[j]), -1.0, 1.0))
+            folded = 0.5 * between + np.maximum(spread[i], spread[j]) > limit
+            hit = ~adjacent | folded
+            active[i[hit]] = True
+            active[j[hit]] = True
+        return np.flatnonzero(active[self.face_patch])
+
+    @staticmethod
+    def _overlapping_boxes(lo, hi):
+        """Pairs (i < j) of boxes that overlap, by FCL's dynamic AABB tree."""
+        geoms = [fcl.Box(*np.maximum(h - l, 1e-9)) for l, h in zip(lo, hi)]
+        objs = [fcl.CollisionObject(g, fcl.Transform(0.5 * (l + h))) for g, l, h in zip(geoms, lo, hi)]
+        index = {id(g): k for k, g in enumerate(geoms)}
+        manager = fcl.DynamicAABBTreeCollisionManager()
+        manager.registerObjects(objs)
+        manager.setup()
+        limit = 64 * len(objs) + 100
+        while True:
+            data = fcl.CollisionData(request=fcl.CollisionRequest(num_max_contacts=limit, enable_contact=False))
+            manager.collide(data, fcl.defaultCollisionCallback)
+            if len(data.result.contacts) < limit:
+                break
+            limit *= 4
+        pairs = np.array([(index[id(c.o1)], index[id(c.o2)]) for c in data.result.contacts], np.int64).reshape(-1, 2)
+        pairs = np.unique(np.sort(pairs, axis=1), axis=0)
+        pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+        return pairs[:, 0], pairs[:, 1]
+
+    # -- broad phase -----------------------------------------------------------------------------
+    @staticmethod
+    def _moved(x, x0):
+        """Largest displacement [m] of a vertex relative to the cloth's centroid from ``x0`` to ``x``."""
+        if x0 is None or len(x0) != len(x):
+            return math.inf
+        return float(np.linalg.norm((x - x.mean(axis=0)) - (x0 - x0.mean(axis=0)), axis=1).max())
+
+    def _query(self, x, step):
+        """Candidates within ``thickness + margin``, plus twice the last step's largest relative
+        displacement ``step``: the candidates were valid until that step, so a pair that crossed
+        during it lies no deeper than that and is found again (the side memory pushes it back)."""
+        t0 = time.perf_counter()
+        self._reach = self.margin + (3.0 * step if math.isfinite(step) else 0.0)
+        faces = self.active_faces(x)
+        self._ptr = np.zeros(self.n + 1, np.int64)
+        self._tri = np.zeros(0, np.int64)
+        if len(faces):
+            verts = np.unique(self.faces[faces])
+            target = bvh_object(x, self.faces[faces])
+            point, local = sphere_query(x[verts], self.thickness + self._reach, target, per_point=24.0)
+            vertex, tri = verts[point], faces[local]
+            # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
+            own = np.isin(vertex[:, None] * self.n + self.faces[tri], self._ring).any(axis=1)
+            vertex, tri = vertex[~own], tri[~own]
+            order = np.lexsort((tri, vertex))
+            vertex, tri = vertex[order], tri[order]
+            self._ptr = np.concatenate([[0], np.cumsum(np.bincount(vertex, minlength=self.n))]).astype(np.int64)
+            self._tri = tri
+            self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
+        self._anchor = x.copy()
+        self.stats["queries"] += 1
+        self.stats["query_s"] += time.perf_counter() - t0
+
+    @property
+    def candidate_pairs(self) -> int:
+        """Vertex–triangle pairs the narrow phase checks each step."""
+        return len(self._tri)
+
+    # -- response --------------------------------------------------------------------------------
+    def respond(self, inv_mass, state, dt: float, *, rounds: int = 4, sweeps: int = 8) -> int:
+        """Resolve self-contacts of ``state`` in place (Eq. 5–8); returns the number of contacts.
+
+        ``inv_mass`` (N,) is 1/m per vertex, 0 for pinned or attached vertices.
+        """
+        x, v = state.x, state.v
+        if len(x) != self.n:
+            raise ValueError(f"self-collider built for {self.n} vertices, state has {len(x)}")
+        if not (np.isfinite(x).all() and np.isfinite(v).all()):
+            raise SimulationUnstable("cloth positions became NaN or infinite before the self-collision query; "
+                                     "try a smaller time step or the implicit integrator")
+        self.stats["steps"] += 1
+        xp = self._x_prev if self._x_prev is not None and len(self._x_prev) == len(x) else None
+        if self._moved(x, self._anchor) >= 0.5 * self._reach:
+            self._query(x, self._moved(x, xp))
+        xp = x if xp is None else xp
+        total = 0
+        if len(self._tri):
+            t0 = time.perf_counter()
+            m = len(self._tri)
+            ci, ca, cn = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 3))
+            im = np.ascontiguousarray(inv_mass, dtype=np.float64)
+            keys = np.zeros(0, np.int64)
+            lists = []
+            for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
+                k = _detect(x, xp, v, dt, self.faces, self._ptr, self._tri, self.thickness,
+                            self.thickness + self._reach, ci, ca, cn)
+                key = np.sort(ci[:k], axis=1) @ np.array([self.n ** 3, self.n ** 2, self.n, 1], np.int64)
+                new = np.flatnonzero(~np.isin(key, keys))
+                if not len(new):
+                    break
+                keys = np.concatenate([keys, key[new]])
+                lists.append((ci[new].copy(), ca[new].copy(), cn[new].copy()))
+                all_i, all_a, all_n = (np.concatenate(c) for c in zip(*lists))
+                _resolve(x, v, im, all_i, all_a, all_n, self.thickness, dt, self.friction, sweeps)
+            total = len(keys)
+            self.stats["response_s"] += time.perf_counter() - t0
+        if total:
+            self.stats["active_steps"] += 1
+            self.stats["contacts"] += total
+        self._x_prev = x.copy()
+        return total
+
+    def report(self) -> dict:
+        """What ran, for report.json."""
+        s = dict(self.stats)
+        s["mode"] = self.mode
+        s["query_s"] = round(s["query_s"], 3)
+        s["response_s"] = round(s["response_s"], 3)
+        s["patches"] = self.patch_count
+        return s
