@@ -49,7 +49,7 @@ import scipy.sparse as sp
 from numba import njit
 
 from ..errors import SimulationUnstable
-from .body import bvh_object, sphere_query
+from .body import bvh_object, manager_contacts, sphere_query
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
@@ -284,20 +284,10 @@ class SelfCollider:
     @staticmethod
     def _overlapping_boxes(lo, hi):
         """Pairs (i < j) of boxes that overlap, by FCL's dynamic AABB tree."""
-        geoms = [fcl.Box(*np.maximum(h - l, 1e-9)) for l, h in zip(lo, hi)]
-        objs = [fcl.CollisionObject(g, fcl.Transform(0.5 * (l + h))) for g, l, h in zip(geoms, lo, hi)]
-        index = {id(g): k for k, g in enumerate(geoms)}
-        manager = fcl.DynamicAABBTreeCollisionManager()
-        manager.registerObjects(objs)
-        manager.setup()
-        limit = 64 * len(objs) + 100
-        while True:
-            data = fcl.CollisionData(request=fcl.CollisionRequest(num_max_contacts=limit, enable_contact=False))
-            manager.collide(data, fcl.defaultCollisionCallback)
-            if len(data.result.contacts) < limit:
-                break
-            limit *= 4
-        pairs = np.array([(index[id(c.o1)], index[id(c.o2)]) for c in data.result.contacts], np.int64).reshape(-1, 2)
+        contacts, index = manager_contacts([fcl.Box(*np.maximum(h - l, 1e-9)) for l, h in zip(lo, hi)],
+                                           [fcl.Transform(0.5 * (l + h)) for l, h in zip(lo, hi)],
+                                           limit=64 * len(lo) + 100)
+        pairs = np.array([(index[id(c.o1)], index[id(c.o2)]) for c in contacts], np.int64).reshape(-1, 2)
         pairs = np.unique(np.sort(pairs, axis=1), axis=0)
         pairs = pairs[pairs[:, 0] != pairs[:, 1]]
         return pairs[:, 0], pairs[:, 1]
