@@ -86,3 +86,16 @@ def test_two_panels_on_a_sphere_intersect_far_less_than_without():
         counts[mode] = intersections(result.frames[-1:], model.faces)[0]
     assert counts["off"] > 300
     assert counts["on"] < 0.2 * counts["off"]
+
+
+def test_strip_piling_up_on_the_floor_is_sub_stepped_instead_of_tangling():
+    mesh, model = cloth_model([rectangle(0.1, 0.8, "strip")], "jersey", 0.025)
+    x0 = np.column_stack([mesh.uv[:, 0], 0.02 * np.sin(12 * mesh.uv[:, 1]), mesh.uv[:, 1] + 0.01])
+    counts = {}
+    for mode in ("off", "on"):
+        result = run_scene(model, x0, body=floor(), duration=0.6, self_collision=mode)
+        counts[mode] = intersections(result.frames[-1:], model.faces)[0]
+        if mode == "on":
+            assert result.report["self_collision"]["max_substeps"] > 1  # its top falls several thicknesses a step
+    assert counts["off"] > 500
+    assert counts["on"] < 0.3 * counts["off"]

@@ -33,9 +33,14 @@ in the two-panel drop; and a predicted contact only has its approach slowed so t
 weights (the centre of mass does not move). Contacts are relaxed Gauss–Seidel style and detection
 repeats until no new contact appears.
 
-Known limit: only vertex–triangle pairs are handled (edge–edge crossings between two sheets are
-not), and nothing subdivides the step, so fast relative motion (a strip piling up on a floor at
-several m/s, 4 cm a step on a 2.5 cm mesh) still tangles.
+Fast motion: when a vertex moved more than one thickness (relative to the cloth) in the step, the
+step's motion is replayed in up to :data:`MAX_SUBSTEPS` sub-steps of at most one thickness, contacts
+resolved after each. A strip piling up on a floor (4 cm a step on a 2.5 cm mesh) then ends with
+217 intersecting triangle pairs instead of 21 k (1.3 k with no self-collision at all).
+
+Known limit: only vertex–triangle pairs are handled; edge–edge crossings between two sheets are
+not, so a few intersections remain where sheets slide across each other (tens of pairs in the
+two-panel drop on a sphere at Δt = 0.01 s, transiently 4–6 at 0.0025 s).
 """
 
 from __future__ import annotations
@@ -55,6 +60,8 @@ __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
 FOLDED_COS = 0.5
+MAX_SUBSTEPS = 16
+"""At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 """A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
 
 
@@ -221,7 +228,7 @@ class SelfCollider:
         self._ptr = np.zeros(self.n + 1, np.int64)
         self._tri = np.zeros(0, np.int64)
         self._x_prev = None
-        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0,
+        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_substeps": 1,
                       "query_s": 0.0, "response_s": 0.0}
 
     # -- regions ---------------------------------------------------------------------------------
@@ -351,22 +358,19 @@ class SelfCollider:
         total = 0
         if len(self._tri):
             t0 = time.perf_counter()
-            m = len(self._tri)
-            ci, ca, cn = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 3))
+            # fast relative motion: replay the step's motion in sub-steps of at most one thickness,
+            # resolving contacts after each, so no pair jumps through another between two checks
+            sub = int(min(MAX_SUBSTEPS, max(1, math.ceil(self._moved(x, xp) / self.thickness))))
+            self.stats["max_substeps"] = max(self.stats["max_substeps"], sub)
             im = np.ascontiguousarray(inv_mass, dtype=np.float64)
+            motion = (x - xp) / sub
+            v_start = v.copy()
+            x[:] = xp
             keys = np.zeros(0, np.int64)
-            lists = []
-            for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
-                k = _detect(x, xp, v, dt, self.faces, self._ptr, self._tri, self.thickness,
-                            self.thickness + self._reach, ci, ca, cn)
-                key = np.sort(ci[:k], axis=1) @ np.array([self.n ** 3, self.n ** 2, self.n, 1], np.int64)
-                new = np.flatnonzero(~np.isin(key, keys))
-                if not len(new):
-                    break
-                keys = np.concatenate([keys, key[new]])
-                lists.append((ci[new].copy(), ca[new].copy(), cn[new].copy()))
-                all_i, all_a, all_n = (np.concatenate(c) for c in zip(*lists))
-                _resolve(x, v, im, all_i, all_a, all_n, self.thickness, dt, self.friction, sweeps)
+            for _ in range(sub):
+                before = x.copy()
+                x += motion + (v - v_start) * (dt / sub)  # the motion, changed by what contacts did to v
+                keys = self._resolve_at(x, before, v, im, dt / sub, keys, rounds, sweeps)
             total = len(keys)
             self.stats["response_s"] += time.perf_counter() - t0
         if total:
@@ -374,6 +378,26 @@ class SelfCollider:
             self.stats["contacts"] += total
         self._x_prev = x.copy()
         return total
+
+    def _resolve_at(self, x, xp, v, im, dt, keys, rounds, sweeps):
+        """Detect and resolve contacts at ``x`` (side memory ``xp``) until nothing new; returns the contact keys."""
+        m = len(self._tri)
+        ci, ca, cn = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 3))
+        weight = np.array([self.n ** 3, self.n ** 2, self.n, 1], np.int64)
+        lists = []
+        seen = np.zeros(0, np.int64)
+        for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
+            k = _detect(x, xp, v, dt, self.faces, self._ptr, self._tri, self.thickness,
+                        self.thickness + self._reach, ci, ca, cn)
+            key = np.sort(ci[:k], axis=1) @ weight
+            new = np.flatnonzero(~np.isin(key, seen))
+            if not len(new):
+                break
+            seen = np.concatenate([seen, key[new]])
+            lists.append((ci[new].copy(), ca[new].copy(), cn[new].copy()))
+            all_i, all_a, all_n = (np.concatenate(c) for c in zip(*lists))
+            _resolve(x, v, im, all_i, all_a, all_n, self.thickness, dt, self.friction, sweeps)
+        return np.union1d(keys, seen)
 
     def report(self) -> dict:
         """What ran, for report.json."""
