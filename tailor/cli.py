@@ -206,6 +206,7 @@ def _cmd_drape(args) -> int:
     t0 = time.perf_counter()
     result = drape(pattern, body, fabric, frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2,
                    integrator=args.integrator, sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
+                   self_collision=args.self_collision,
                    progress=progress)
     if not quiet:
         print(file=sys.stderr)
@@ -293,6 +294,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--resolution", type=float, default=2.0, metavar="CM", help="mesh edge length (cm, default 2)")
     d.add_argument("--integrator", default="implicit", choices=list(INTEGRATORS))
     d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
+    d.add_argument("--self-collision", default="off", choices=["auto", "on", "off"],
+                   help="cloth-cloth contact once the garment is sewn: auto = only where it can touch itself "
+                        "(default off: edge-edge crossings are not handled yet)")
     d.add_argument("--record-sewing", action="store_true", help="also write the sewing and settling frames")
     d.add_argument("--with-body", action="store_true", help="also write the body of every frame")
     d.add_argument("--out", metavar="DIR", help="output folder (default out/<pattern name>)")

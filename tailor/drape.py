@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .collide import BodyCollider, points_inside
+from .collide import SELF_COLLISION_MODES, BodyCollider, SelfCollider, points_inside
 from .errors import SimulationError
 from .fabric import Fabric, preset
 from .forces import total_forces
@@ -136,7 +136,7 @@ class _Attachments:
 
 def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DEFAULT_RESOLUTION,
           integrator: str = "implicit", sew_timeout: float = 4.0, settle: float = 1.0, record_sewing: bool = False,
-          on_frame=None, progress=None) -> DrapeResult:
+          self_collision: str = "off", on_frame=None, progress=None) -> DrapeResult:
     """Dress ``body`` in ``pattern`` and animate it.
 
     Parameters
@@ -152,6 +152,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         Mesh edge length [m].
     record_sewing : bool
         Also return the sewing and settling as frames (before frame 0).
+    self_collision : {"off", "auto", "on"}
+        Cloth–cloth contact (:class:`~tailor.collide.SelfCollider`) from the moment the garment is
+        sewn (during sewing, seam edges must be free to meet).
     on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
     progress : callable ``progress(phase, done, total)``, optional
 
@@ -161,6 +164,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         Seams that do not close within ``sew_timeout`` seconds; SimulationUnstable from the guard.
     """
     t_start = time.perf_counter()
+    if self_collision not in SELF_COLLISION_MODES:
+        raise ValueError(f"self_collision must be one of {', '.join(SELF_COLLISION_MODES)}, got {self_collision!r}")
     if isinstance(fabric, str):
         fabric = preset(fabric)
     base = fabric if isinstance(fabric, Fabric) else pattern.fabric
@@ -192,9 +197,10 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               "integrator": integrator, "time_step_eq24_s": unwelded.time_step, "phases": {}, "seam_pairs": len(sewing.pairs),
               "fabrics": {p.name: fabrics[i].name for i, p in enumerate(pattern.panels)},
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
-              "active": {"bending": unwelded.has_bending, "air": True, "body_collision": True, "self_collision": False}}
+              "active": {"bending": unwelded.has_bending, "air": True, "body_collision": True,
+                         "self_collision": self_collision}}
     sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
-           "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0}
+           "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0, "self": None}
 
     def rebuild(state_x, state_v):
         """Weld the merged pairs into one particle each and carry the state over (Eq. 17–18)."""
@@ -238,6 +244,13 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         # sewing is assembly: panels slide over the body into place without friction
         mu = sim["friction"] if sim["gravity"] else sim["friction"] * SEWING_FRICTION
         deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness, friction=mu))
+        if self_collision != "off" and sim["gravity"]:  # sewn: layers may no longer pass through each other
+            selfc = sim["self"]
+            if selfc is None or selfc.n != model_.vertex_count:  # welding renumbered the vertices
+                selfc = sim["self"] = SelfCollider(model_.faces, model_.face_panel, state.x, thickness=thickness,
+                                                   mode=self_collision, friction=float(np.mean(sim["friction"])))
+                sim["self_inv_mass"] = np.where(model_.vertex_pinned, 0.0, 1.0 / np.asarray(model_.vertex_mass))
+            selfc.respond(sim["self_inv_mass"], state, dt)
 
     def forces(model_, state):
         return sewing.forces(model_, state, sim["weld"], total_forces(model_, state))
@@ -387,4 +400,5 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     report["max_contact_correction_m"] = deepest[0]  # deepest penetration any step had to undo
     report["vertices_rescued_from_inside_body"] = sim["rescued"]
     report["welded_vertices"] = int(sim["model"].vertex_count)
+    report["self_collision"] = sim["self"].report() if sim["self"] is not None else {"mode": self_collision}
     return DrapeResult(out_frames, body_frames, mesh, sim["weld"], body.faces, pattern, report)

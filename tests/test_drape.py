@@ -8,7 +8,7 @@ import pytest
 from conftest import PANELS, sheet
 from tailor.body import Body
 from tailor.cli import main
-from tailor.collide import BodyCollider
+from tailor.collide import BodyCollider, self_intersections
 from tailor.drape import drape
 from tailor.geometry import connected_components
 from tailor.io import read_pattern
@@ -99,6 +99,19 @@ def test_skirt_sews_into_one_piece_without_penetration(skirt_static, tmp_path):
     x = result.frames[-1]
     sewing_pairs = result.mesh.seam_pairs[result.mesh.seam_pairs[:, 0] != result.mesh.seam_pairs[:, 1]]
     assert np.all(x[sewing_pairs[:, 0]] == x[sewing_pairs[:, 1]])
+
+
+def test_self_collision_runs_once_the_garment_is_sewn():
+    pattern = read_pattern(PANELS / "skirt.json")
+    result = drape(pattern, read_body("mannequin"), frames=3, resolution=0.04, self_collision="on")
+    report = result.report
+    assert report["active"]["self_collision"] == "on"
+    assert report["self_collision"]["steps"] > 0 and report["self_collision"]["queries"] > 0
+    assert report["max_penetration_m"] <= 0.002
+    weld = result.weld
+    x = np.zeros((int(weld.max()) + 1, 3))
+    x[weld] = result.frames[-1]
+    assert len(self_intersections(x, weld[result.mesh.faces])) == 0
 
 
 def test_skirt_waistband_sits_at_the_waist(skirt_static):
