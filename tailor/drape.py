@@ -33,7 +33,7 @@ from .model import AIR_DENSITY, build_model
 from .placement import place_panels
 from .integrators import make_integrator
 from .seams import Sewing, merge_state
-from .sim import IMPLICIT_STEP, Guard, max_stretch, simulate
+from .sim import IMPLICIT_STEP, Guard, held_impulse, hold_contacts, max_stretch, simulate
 
 __all__ = ["drape", "DrapeResult", "NEAR_SEAM", "NEAR_RATE"]
 
@@ -243,7 +243,10 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             sim["attach"].apply(state, bx, bv)
         # sewing is assembly: panels slide over the body into place without friction
         mu = sim["friction"] if sim["gravity"] else sim["friction"] * SEWING_FRICTION
-        deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness, friction=mu))
+        deepest[0] = max(deepest[0], collider.respond(model_, state, dt, bx, bv, k, thickness=thickness, friction=mu,
+                                                      impulse=held_impulse(integ, model_)))
+        if sim["gravity"]:  # sewn: the solve holds resting contacts (sewing slides panels over the body freely)
+            hold_contacts(integ, model_, collider.contact_set)
         if self_collision != "off" and sim["gravity"]:  # sewn: layers may no longer pass through each other
             selfc = sim["self"]
             if selfc is None or selfc.n != model_.vertex_count:  # welding renumbered the vertices

@@ -19,12 +19,13 @@ from .collide import BodyCollider, SelfCollider, SELF_COLLISION_MODES
 from .curves import Curve
 from .errors import SimulationError
 from .fabric import Fabric, preset
-from .mesh import discretise
+from .mesh import GarmentMesh, discretise
 from .model import build_model
 from .pattern import Edge, Panel, Pattern
-from .sim import Guard, simulate
+from .integrators import make_integrator
+from .sim import Guard, held_impulse, hold_contacts, simulate
 
-__all__ = ["rectangle", "sphere", "floor", "run_scene", "SceneResult", "cloth_model"]
+__all__ = ["rectangle", "grid", "sphere", "floor", "run_scene", "SceneResult", "cloth_model"]
 
 
 def rectangle(width: float, height: float, name: str = "panel", *, grain: float = 0.5 * math.pi) -> Panel:
@@ -32,6 +33,33 @@ def rectangle(width: float, height: float, name: str = "panel", *, grain: float 
     pts = ((0.0, 0.0), (width, 0.0), (width, height), (0.0, height))
     edges = tuple(Edge(Curve("straight", (pts[i], pts[(i + 1) % 4])), (i, (i + 1) % 4)) for i in range(4))
     return Panel(name, pts, edges, grain=grain)
+
+
+def grid(width: float, height: float, nx: int, ny: int | None = None, name: str = "cloth", *,
+         grain: float = 0.5 * math.pi) -> GarmentMesh:
+    """A regular ``nx`` × ``ny`` vertex grid over a ``width`` × ``height`` [m] panel, as a mesh.
+
+    Each quad is split along alternating diagonals (no preferred shear direction), the layout a
+    cloth tool's grid primitive gives, so scenes can be compared vertex for vertex with one.
+    """
+    ny = nx if ny is None else ny
+    if nx < 2 or ny < 2:
+        raise ValueError(f"a grid needs at least 2 × 2 vertices, got {nx} × {ny}")
+    u, v = np.meshgrid(np.linspace(0.0, width, nx), np.linspace(0.0, height, ny), indexing="xy")
+    uv = np.c_[u.ravel(), v.ravel()]
+    i, j = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1), indexing="xy")
+    a = (j * nx + i).ravel()
+    b, c, d = a + 1, a + nx, a + nx + 1
+    even = ((i + j) % 2 == 0).ravel()
+    first = np.where(even[:, None], np.c_[a, b, d], np.c_[a, b, c])
+    second = np.where(even[:, None], np.c_[a, d, c], np.c_[b, d, c])
+    faces = np.stack([first, second], axis=1).reshape(-1, 3)
+    boundary = 2 * (nx - 1) + 2 * (ny - 1)
+    edge_vertices = {(0, None, 0): np.arange(nx), (0, None, 1): np.arange(nx - 1, nx * ny, nx),
+                     (0, None, 2): np.arange(nx * ny - 1, nx * (ny - 1) - 1, -1), (0, None, 3): np.arange(nx * (ny - 1), -1, -nx)}
+    return GarmentMesh(uv, faces, np.zeros(len(uv), np.intp), np.zeros(len(faces), np.intp),
+                       np.tile([math.cos(grain), math.sin(grain)], (len(faces), 1)), np.zeros((0, 2), np.intp),
+                       np.zeros(0, np.intp), edge_vertices, (name,), max(width / (nx - 1), height / (ny - 1)), boundary)
 
 
 def sphere(radius: float, center=(0.0, 0.0, 0.0), *, subdivisions: int = 4):
@@ -90,11 +118,13 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
                              friction=friction)
     inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
     deepest = [0.0]
+    integ = make_integrator(integrator) if isinstance(integrator, str) else integrator
 
     def contact(model_, st, h):
         if body_collider is not None:
             deepest[0] = max(deepest[0], body_collider.respond(model_, st, h, bv, body_vel, 0, thickness=thickness,
-                                                                friction=friction))
+                                                                friction=friction, impulse=held_impulse(integ, model_)))
+            hold_contacts(integ, model_, body_collider.contact_set)
         if selfc is not None:  # after the body: a layer the body pushed out pushes the next one (side memory)
             selfc.respond(inv_mass, st, h)
 
@@ -104,7 +134,7 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
     def count(model_, st, h):
         steps[0] += 1
 
-    for _, st in simulate(model, state, duration=duration, frame_rate=fps, integrator=integrator, dt=dt,
+    for _, st in simulate(model, state, duration=duration, frame_rate=fps, integrator=integ, dt=dt,
                           hooks=[contact, *hooks, count], guard=guard or Guard()):
         frames.append(st.x.copy())
         if on_frame is not None:

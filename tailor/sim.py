@@ -19,9 +19,9 @@ import numpy as np
 from .errors import SimulationUnstable
 from .forces import total_forces
 from .forces.membrane import deformation_gradient
-from .integrators import make_integrator
+from .integrators import Contacts, make_integrator
 
-__all__ = ["Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP"]
+__all__ = ["Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP", "held_impulse", "hold_contacts"]
 
 IMPLICIT_STEP = 0.01
 """Default step of the implicit integrator [s]: stable far beyond Eq. 24, four steps per 25 fps frame."""
@@ -136,3 +136,20 @@ def run(model, state, **kwargs):
     for _, final in simulate(model, state, **kwargs):  # noqa: B007 - the loop keeps the last state
         continue
     return final
+
+
+def held_impulse(integ, model):
+    """(N,) normal impulse [N·s] the implicit solve gave the contacts it held (None if it held none)."""
+    ids = getattr(integ, "contact_ids", None)
+    if ids is None or not len(ids) or integ.contact_vertex_count != model.vertex_count:
+        return None
+    out = np.zeros(model.vertex_count)
+    out[ids] = integ.contact_impulse
+    return out
+
+
+def hold_contacts(integ, model, contact_set) -> None:
+    """Hand body contacts (ids, normals, body normal velocity) to an implicit integrator for its next step."""
+    if hasattr(integ, "contacts"):
+        ids, normals, vn = contact_set
+        integ.contacts = Contacts(ids, normals, vn, model.vertex_count)

@@ -218,8 +218,8 @@ def test_trousers_and_dress_sew_into_one_piece_on_the_mannequin(name, mannequin)
     assert all(np.isfinite(f).all() for f in result.frames)
     marks = find_landmarks(mannequin.vertices, mannequin.faces)
     top = result.frames[-1][:, 2].max()
-    if name == "trousers":  # hanging from the waist, legs down to the ankles
-        assert abs(top - marks["waist"].height) < 0.06 and result.frames[-1][:, 2].min() < marks["left_knee"].height
+    if name == "trousers":  # hanging from the waist (placed 5.5 cm above the landmark), legs down to the ankles
+        assert abs(top - marks["waist"].height) < 0.075 and result.frames[-1][:, 2].min() < marks["left_knee"].height
     else:  # hanging from the shoulders: nothing above the neck, nothing fallen below the knees
         assert top < marks["neck"].height + 0.05 and result.frames[-1][:, 2].min() > marks["left_knee"].height - 0.15
 

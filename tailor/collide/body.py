@@ -247,6 +247,7 @@ class BodyCollider:
         self._bvh = {}
         self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle)
         self._previous = None  # signed distance of every vertex after the last response
+        self.contact_set = (np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0))
         self.queries = 0
         self.queried_points = 0
 
@@ -333,8 +334,14 @@ class BodyCollider:
             self._previous[ids] = thickness
         return len(ids)
 
-    def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness: float, friction):
+    def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness: float, friction, impulse=None):
         """Eq. 9–14 on ``state`` in place: push out to ``thickness``, cancel approach, apply friction.
+
+        ``impulse`` (N,) [N·s], optional: the normal impulse the integrator's solve already gave
+        each vertex it held on the body (:attr:`contact_set` of the previous call); it counts
+        towards the friction budget of Eq. 14 like the approach cancelled here. Afterwards
+        :attr:`contact_set` = (ids, normals, body normal velocity) of the vertices resting on the
+        body and not being pulled into it, for the next implicit step to hold.
 
         Returns the deepest penetration [m] found before the response (0 if none).
         """
@@ -348,6 +355,7 @@ class BodyCollider:
         plausible = (dist > -0.5 * self.margin) | crossed
         hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & plausible)
         self._previous = np.where(tri >= 0, dist, np.inf)
+        self.contact_set = (np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0))
         if not len(hit):
             return 0.0
         depth = float(max(0.0, -dist[hit].min()))
@@ -358,20 +366,30 @@ class BodyCollider:
         n = normal[hit]
         movable = ~model.vertex_pinned[hit]
         hit, n, vb = hit[movable], n[movable], vb[movable]
-        push = np.maximum(thickness - dist[hit], 0.0)[:, None] * n
-        state.x[hit] += push
         rel = state.v[hit] - vb  # Eq. 9
         vn = np.einsum("ij,ij->i", rel, n)  # Eq. 10
-        approach = np.minimum(vn, 0.0)
-        dv_n = -approach
+        # a vertex that started the step above the thickness falls until it lands on it (its
+        # position moves with the approach up to there), then rests: normal velocity cancelled
+        start_gap = dist[hit] - dt * vn
+        land = np.where(vn < 0, np.maximum(vn, -np.maximum(start_gap - thickness, 0.0) / dt), vn)
+        dv_n = -np.minimum(vn, 0.0)  # the approach cancelled here
+        held = np.zeros(len(hit)) if impulse is None else np.asarray(impulse)[hit] / model.vertex_mass[hit]
+        dv_n += np.maximum(held, 0.0)  # ... and the support the solve gave
         tangential = rel - vn[:, None] * n  # Eq. 11
         speed_t = np.linalg.norm(tangential, axis=1)
         mu = np.asarray(friction)[hit] if np.ndim(friction) else float(friction)
         # Eq. 14: friction removes at most μ·(normal velocity change); beyond that it stops sliding
         keep = np.where(speed_t > 0, np.maximum(0.0, 1.0 - mu * dv_n / np.maximum(speed_t, 1e-300)), 0.0)
-        new_rel = np.where(vn[:, None] < 0, tangential * keep[:, None], rel)
+        pressed = ((vn < 0) | (held > 0))[:, None]
+        new_rel = np.where(pressed, tangential * keep[:, None] + np.maximum(vn, 0.0)[:, None] * n, rel)
         v_new = vb + new_rel
         # the step already moved the vertex with its old velocity: move it as the new one would
-        state.x[hit] += dt * (v_new - state.v[hit])
+        # (with the landing approach), then out to the thickness if it started closer
+        shift = dt * (v_new - state.v[hit] + np.where(pressed, np.minimum(land, 0.0)[:, None] * n, 0.0))
+        gap = dist[hit] + np.einsum("ij,ij->i", shift, n)
+        state.x[hit] += shift + np.maximum(thickness - gap, 0.0)[:, None] * n
         state.v[hit] = v_new
+        # resting (not leaving) and not held by a pull last step: hold it during the next one
+        rest = (np.einsum("ij,ij->i", new_rel, n) <= 1e-9) & (held >= 0)
+        self.contact_set = (hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]))
         return depth

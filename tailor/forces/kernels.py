@@ -20,6 +20,7 @@ __all__ = [
     "membrane_jacobian_into",
     "bending_jacobian_into",
     "jacobi_pcg",
+    "filtered_pcg",
 ]
 
 
@@ -303,6 +304,65 @@ def jacobi_pcg(indptr, indices, data, b, x, inv_diag, rtol, max_iterations):
             x[i] += alpha * p[i]
             r[i] -= alpha * q[i]
             z[i] = r[i] * inv_diag[i]
+        rz_new = np.dot(r, z)
+        beta = rz_new / rz
+        rz = rz_new
+        for i in range(n):
+            p[i] = z[i] + beta * p[i]
+    return max_iterations, math.sqrt(np.dot(r, r)) <= target
+
+
+@njit(cache=True)
+def _filter(v, ids, normals):
+    """Remove from ``v`` (3N,) the normal component of every constrained vertex."""
+    for k in range(len(ids)):
+        i = 3 * ids[k]
+        d = v[i] * normals[k, 0] + v[i + 1] * normals[k, 1] + v[i + 2] * normals[k, 2]
+        v[i] -= d * normals[k, 0]
+        v[i + 1] -= d * normals[k, 1]
+        v[i + 2] -= d * normals[k, 2]
+
+
+@njit(cache=True)
+def filtered_pcg(indptr, indices, data, b, x, inv_diag, rtol, max_iterations, ids, normals):
+    """Jacobi-preconditioned CG restricted to the free subspace of contact constraints, in place.
+
+    Baraff & Witkin's modified PCG (1998, §5.3): vertex ``ids[k]`` may not change its velocity
+    along ``normals[k]`` from the value ``x`` holds on entry (the caller sets it to the prescribed
+    one), but moves freely in the tangent plane; unconstrained dofs solve A·x = b. Residual and
+    search directions are projected ("filtered") onto the free subspace, so A·x − b on exit is
+    the constraint's reaction, along the normals only. Returns (iterations, converged); stops
+    when |filtered r| ≤ rtol·|b| (the unconstrained solver's scale).
+    """
+    n = len(b)
+    r = np.empty(n)
+    q = np.empty(n)
+    bnorm = math.sqrt(np.dot(b, b))
+    _csr_matvec(indptr, indices, data, x, q)
+    for i in range(n):
+        r[i] = b[i] - q[i]
+    _filter(r, ids, normals)
+    if bnorm == 0.0:
+        return 0, True
+    target = rtol * bnorm
+    z = r * inv_diag
+    _filter(z, ids, normals)
+    p = z.copy()
+    rz = np.dot(r, z)
+    for it in range(max_iterations):
+        if math.sqrt(np.dot(r, r)) <= target:
+            return it, True
+        _csr_matvec(indptr, indices, data, p, q)
+        _filter(q, ids, normals)
+        pq = np.dot(p, q)
+        if pq <= 0.0:
+            return it, False
+        alpha = rz / pq
+        for i in range(n):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+            z[i] = r[i] * inv_diag[i]
+        _filter(z, ids, normals)
         rz_new = np.dot(r, z)
         beta = rz_new / rz
         rz = rz_new
