@@ -22,7 +22,7 @@ from .fabric import Fabric, preset
 from .mesh import GarmentMesh, discretise
 from .model import build_model
 from .pattern import Edge, Panel, Pattern
-from .integrators import make_integrator
+from .integrators import Contacts, make_integrator
 from .sim import Guard, held_impulse, hold_contacts, simulate
 
 __all__ = ["rectangle", "grid", "sphere", "floor", "run_scene", "SceneResult", "cloth_model"]
@@ -119,6 +119,9 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
     inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
     deepest = [0.0]
     integ = make_integrator(integrator) if isinstance(integrator, str) else integrator
+    if body_collider is not None and hasattr(integ, "predict"):
+        integ.predict = lambda m, st, x, v, h: Contacts(*body_collider.landing(m, x, v, h, bv, body_vel, 0, thickness=thickness),
+                                                        m.vertex_count)
 
     def contact(model_, st, h):
         if body_collider is not None:

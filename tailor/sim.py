@@ -149,7 +149,8 @@ def held_impulse(integ, model):
 
 
 def hold_contacts(integ, model, contact_set) -> None:
-    """Hand body contacts (ids, normals, body normal velocity) to an implicit integrator for its next step."""
+    """Hand body contacts (ids, normals, body normal velocity, stuck, body velocity, μ) to an implicit
+    integrator for its next step."""
     if hasattr(integ, "contacts"):
-        ids, normals, vn = contact_set
-        integ.contacts = Contacts(ids, normals, vn, model.vertex_count)
+        ids, normals, vn, stuck, vb, mu = contact_set
+        integ.contacts = Contacts(ids, normals, vn, model.vertex_count, stick=stuck, body_velocity=vb, friction=mu)

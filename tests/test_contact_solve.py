@@ -61,3 +61,30 @@ def test_a_sheet_falling_onto_a_sphere_at_a_large_step_is_not_torn_apart():
     assert worst[0] < 1.35
     d = np.linalg.norm(run.frames[-1], axis=1)
     assert d.min() > 0.25 * np.cos(np.pi / 40) - 1e-3  # nothing inside the (faceted) sphere
+
+
+def _incline(theta):
+    """A 4 m square plane through the origin, tilted by ``theta`` about x (downhill = −y)."""
+    c, s = np.cos(theta), np.sin(theta)
+    v = np.array([[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], float)
+    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    return v @ rot.T, np.array([[0, 1, 2], [0, 2, 3]])
+
+
+@pytest.mark.parametrize("degrees, mu", [(20.0, 0.5), (30.0, 0.2)])
+def test_coulomb_friction_on_an_incline_holds_or_slides_at_the_right_acceleration(degrees, mu):
+    theta = np.radians(degrees)
+    mesh = grid(0.1, 0.1, 6)
+    model = build_model(mesh, preset("denim"))
+    thickness = 0.002
+    normal = np.array([0.0, -np.sin(theta), np.cos(theta)])
+    rot = np.array([[1, 0, 0], [0, np.cos(theta), -np.sin(theta)], [0, np.sin(theta), np.cos(theta)]])
+    x0 = np.c_[mesh.uv - 0.05, np.zeros(len(mesh.uv))] @ rot.T + thickness * normal
+    run = run_scene(model, x0, body=_incline(theta), duration=0.5, dt=0.01, thickness=thickness, friction=mu,
+                    self_collision="off")
+    travelled = np.linalg.norm(run.frames[-1] - x0, axis=1).mean()
+    expected = 0.5 * GRAVITY * max(np.sin(theta) - mu * np.cos(theta), 0.0) * 0.5**2
+    if expected == 0.0:
+        assert travelled < 1e-3  # static friction holds: no creep
+    else:
+        assert travelled == pytest.approx(expected, rel=0.1)

@@ -17,6 +17,8 @@ from ..errors import SimulationUnstable
 
 __all__ = ["bvh_object", "manager_contacts", "sphere_query", "self_intersections", "points_inside", "BodyCollider"]
 
+_NO_CONTACTS = (np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0, bool), np.zeros((0, 3)), np.zeros(0))
+
 
 def bvh_object(vertices, faces):
     """An FCL collision object over a triangle mesh (identity transform)."""
@@ -247,7 +249,7 @@ class BodyCollider:
         self._bvh = {}
         self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle)
         self._previous = None  # signed distance of every vertex after the last response
-        self.contact_set = (np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0))
+        self.contact_set = _NO_CONTACTS
         self.queries = 0
         self.queried_points = 0
 
@@ -334,14 +336,36 @@ class BodyCollider:
             self._previous[ids] = thickness
         return len(ids)
 
+    def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness: float):
+        """Vertices a step would bring within ``thickness`` of the body: (ids, normals, normal velocity).
+
+        ``x_end``, ``v_end`` are where a solved step would leave the cloth. A vertex that started
+        the step outside (or just inside) the thickness and would end closer gets the normal
+        velocity that makes it land exactly at the thickness, relative to the body; an implicit
+        solve holding that (:class:`tailor.integrators.ImplicitEuler` ``predict``) lands the cloth
+        within the step instead of having it pushed out afterwards.
+        """
+        dist, tri, bary, normal = self.nearest(x_end, body_x, frame)
+        close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
+        if not len(close):
+            return np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0)
+        n = normal[close]
+        vb = np.einsum("kij,ki->kj", body_v[self.faces[tri[close]]], bary[close])
+        vn = np.einsum("ij,ij->i", v_end[close] - vb, n)
+        start = dist[close] - dt * vn  # where it started, relative to the body
+        ok = (vn < 0) & (start > -0.5 * self.margin)
+        close, n, vb, start = close[ok], n[ok], vb[ok], start[ok]
+        return close, n, np.einsum("ij,ij->i", vb, n) - np.maximum(start - thickness, 0.0) / dt
+
     def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness: float, friction, impulse=None):
         """Eq. 9–14 on ``state`` in place: push out to ``thickness``, cancel approach, apply friction.
 
         ``impulse`` (N,) [N·s], optional: the normal impulse the integrator's solve already gave
         each vertex it held on the body (:attr:`contact_set` of the previous call); it counts
         towards the friction budget of Eq. 14 like the approach cancelled here. Afterwards
-        :attr:`contact_set` = (ids, normals, body normal velocity) of the vertices resting on the
-        body and not being pulled into it, for the next implicit step to hold.
+        :attr:`contact_set` = (ids, normals, body normal velocity, stuck, body velocity, μ) of the
+        vertices resting on the body and not being pulled into it, for the next implicit step to
+        hold (stuck ones entirely: friction stopped them here).
 
         Returns the deepest penetration [m] found before the response (0 if none).
         """
@@ -355,7 +379,7 @@ class BodyCollider:
         plausible = (dist > -0.5 * self.margin) | crossed
         hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & plausible)
         self._previous = np.where(tri >= 0, dist, np.inf)
-        self.contact_set = (np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0))
+        self.contact_set = _NO_CONTACTS
         if not len(hit):
             return 0.0
         depth = float(max(0.0, -dist[hit].min()))
@@ -373,8 +397,8 @@ class BodyCollider:
         start_gap = dist[hit] - dt * vn
         land = np.where(vn < 0, np.maximum(vn, -np.maximum(start_gap - thickness, 0.0) / dt), vn)
         dv_n = -np.minimum(vn, 0.0)  # the approach cancelled here
+        # contacts the solve held had their friction there (stuck, or sliding at the Coulomb limit)
         held = np.zeros(len(hit)) if impulse is None else np.asarray(impulse)[hit] / model.vertex_mass[hit]
-        dv_n += np.maximum(held, 0.0)  # ... and the support the solve gave
         tangential = rel - vn[:, None] * n  # Eq. 11
         speed_t = np.linalg.norm(tangential, axis=1)
         mu = np.asarray(friction)[hit] if np.ndim(friction) else float(friction)
@@ -389,7 +413,10 @@ class BodyCollider:
         gap = dist[hit] + np.einsum("ij,ij->i", shift, n)
         state.x[hit] += shift + np.maximum(thickness - gap, 0.0)[:, None] * n
         state.v[hit] = v_new
-        # resting (not leaving) and not held by a pull last step: hold it during the next one
+        # resting (not leaving) and not held by a pull last step: hold it during the next one,
+        # first stuck to the body; the solve lets it slide, at the Coulomb limit, if it must
         rest = (np.einsum("ij,ij->i", new_rel, n) <= 1e-9) & (held >= 0)
-        self.contact_set = (hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]))
+        stuck = np.ones(len(hit), bool)
+        mu = np.broadcast_to(mu, hit.shape)
+        self.contact_set = (hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]), stuck[rest], vb[rest], mu[rest])
         return depth

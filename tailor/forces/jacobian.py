@@ -73,6 +73,36 @@ class SparsePattern:
         self.diagonal_slots = self.scatter[self.diagonal_offset :]
         """CSR slot of each diagonal entry (dof order)."""
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.rows, minlength=n))]).astype(np.int32)
+        self._block_slots = None
+        self._diag_block = None
+
+    def _blocks_map(self):
+        """CSR slot of every entry of the 3×3 block form (−1: structurally zero), built once."""
+        if self._block_slots is None:
+            n = self.shape[0]
+            a = sp.csr_matrix((np.arange(1, self.nnz + 1, dtype=float), self.cols, self.indptr), shape=self.shape).tobsr(
+                blocksize=(3, 3))
+            a.sort_indices()
+            self._block_slots = np.rint(a.data).astype(np.int64).reshape(-1) - 1
+            self.block_indptr = a.indptr.astype(np.int32)
+            self.block_cols = a.indices.astype(np.int32)
+            assert len(self.block_indptr) == n // 3 + 1
+        return self._block_slots
+
+    def blocks(self, data) -> np.ndarray:
+        """The stored values as 3×3 blocks (B, 3, 3) in the order of ``block_indptr``/``block_cols``."""
+        slots = self._blocks_map()
+        out = np.where(slots >= 0, np.concatenate([data, [0.0]])[slots], 0.0)
+        return out.reshape(-1, 3, 3)
+
+    def diagonal_blocks(self, blocks) -> np.ndarray:
+        """(N, 3, 3) diagonal block of every vertex row."""
+        self._blocks_map()
+        if self._diag_block is None:
+            rows = np.repeat(np.arange(len(self.block_indptr) - 1), np.diff(self.block_indptr))
+            self._diag_block = np.flatnonzero(rows == self.block_cols)
+            assert len(self._diag_block) == len(self.block_indptr) - 1
+        return blocks[self._diag_block]
 
     def matrix(self, entries) -> sp.csr_matrix:
         """CSR matrix from the concatenated element entries (in pattern order, identity slot last)."""
