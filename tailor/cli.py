@@ -206,7 +206,7 @@ def _cmd_drape(args) -> int:
     t0 = time.perf_counter()
     result = drape(pattern, body, fabric, frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2,
                    integrator=args.integrator, sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
-                   self_collision=args.self_collision,
+                   self_collision=args.self_collision, quality=args.quality,
                    progress=progress)
     if not quiet:
         print(file=sys.stderr)
@@ -216,6 +216,54 @@ def _cmd_drape(args) -> int:
           f"{len(result.frames)} frames, max penetration {r['max_penetration_m'] * 1000:.1f} mm, "
           f"seam gap at merge {r['phases']['sewing']['max_gap_at_merge_m'] * 1000:.1f} mm, "
           f"{time.perf_counter() - t0:.1f} s -> {out}/")
+    return 0
+
+
+def _cmd_bench(args) -> int:
+    from pathlib import Path
+
+    from . import bench
+
+    out = Path(args.out)
+    quiet = args.quiet
+    t0 = time.perf_counter()
+
+    def progress(i, total, item):
+        if quiet:
+            return
+        elapsed = time.perf_counter() - t0
+        eta = elapsed / i * (total - i)
+        text = (f"{item.scene} {item.integrator} n={item.resolution} dt={item.dt:.3g} {item.wall_s:.1f}s"
+                if isinstance(item, bench.Run) else f"{item[0]} {item[1]}={item[2]:g} {item[3]}")
+        bar = "#" * int(20 * i / total)
+        print(f"\r[{bar:<20}] {i}/{total} ETA {eta:4.0f}s  {text:<60}", end="", file=sys.stderr, flush=True)
+
+    if args.stability:
+        rows = bench.stability_map(integrators=("implicit", "symplectic") if args.quick else ("implicit", "symplectic", "rk4"),
+                                   progress=progress)
+        if not quiet:
+            print(file=sys.stderr)
+        print(bench.stability_text(rows))
+        paths = bench.write_stability(rows, out)
+        failed = [r for r in rows if r[3] not in ("ok", "unstable")]
+    else:
+        names = args.scenes or list(bench.SCENES)
+        unknown = [n for n in names if n not in bench.SCENES]
+        if unknown:
+            raise TailorError(f"unknown bench scene {unknown[0]!r}; choose from {', '.join(bench.SCENES)}")
+        runs = bench.sweep(names, quick=args.quick, progress=progress)
+        if not quiet:
+            print(file=sys.stderr)
+        paths = bench.write_results(runs, out)
+        for name in names:
+            front = bench.pareto([r for r in runs if r.scene == name])
+            print(f"{name}: frontier " + ", ".join(f"{r.label or r.integrator} n{r.resolution} {r.dt:.3g}s "
+                                                   f"{r.wall_s:.1f}s/{r.error_mean_mm:.1f}mm" for r in front))
+        failed = [r for r in runs if r.note.startswith("FAILED")]
+    print("wrote " + ", ".join(str(p) for p in paths))
+    if failed:
+        print(f"tailor: error: {len(failed)} run(s) wrote a non-finite frame or failed otherwise", file=sys.stderr)
+        return 2
     return 0
 
 
@@ -293,6 +341,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--fps", type=float, default=25.0)
     d.add_argument("--resolution", type=float, default=2.0, metavar="CM", help="mesh edge length (cm, default 2)")
     d.add_argument("--integrator", default="implicit", choices=list(INTEGRATORS))
+    d.add_argument("--quality", default="final", choices=["draft", "normal", "final"],
+                   help="speed/accuracy of the implicit step (default final; see `tailor bench`)")
     d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
     d.add_argument("--self-collision", default="off", choices=["auto", "on", "off"],
                    help="cloth-cloth contact once the garment is sewn: auto = only where it can touch itself "
@@ -302,6 +352,13 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--out", metavar="DIR", help="output folder (default out/<pattern name>)")
     d.add_argument("--overwrite", action="store_true", help="replace an existing output folder")
     d.set_defaults(func=_cmd_drape)
+
+    be = sub.add_parser("bench", help="measure speed versus accuracy (or stability at the extremes)")
+    be.add_argument("scenes", nargs="*", metavar="SCENE", help="sphere, hang (default: all)")
+    be.add_argument("--quick", action="store_true", help="small meshes and few steps (under 3 minutes)")
+    be.add_argument("--stability", action="store_true", help="the stability map instead of the sweep")
+    be.add_argument("--out", default="out/bench", metavar="DIR", help="output folder (default out/bench)")
+    be.set_defaults(func=_cmd_bench)
     return p
 
 

@@ -33,7 +33,7 @@ from .model import AIR_DENSITY, build_model
 from .placement import place_panels
 from .integrators import make_integrator
 from .seams import Sewing, merge_state
-from .sim import IMPLICIT_STEP, Guard, held_impulse, hold_contacts, max_stretch, simulate
+from .sim import Guard, quality as sim_quality, held_impulse, hold_contacts, max_stretch, simulate
 
 __all__ = ["drape", "DrapeResult", "NEAR_SEAM", "NEAR_RATE"]
 
@@ -49,8 +49,6 @@ COMPRESSION = 0.1
 SEWING_MAX_STRETCH = 10.0
 """Sewing is assembly: a corner pulled three ways may stretch its triangles this far before merging."""
 
-STEP_PER_RESOLUTION = 0.25
-"""Implicit time step per metre of mesh resolution [s/m]: 0.01 s at 4 cm, 0.005 s at 2 cm."""
 
 TRANSITION = 1.0
 """Seconds a body dressed in its rest pose takes to move into the first frame of its motion."""
@@ -136,7 +134,7 @@ class _Attachments:
 
 def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DEFAULT_RESOLUTION,
           integrator: str = "implicit", sew_timeout: float = 4.0, settle: float = 1.0, record_sewing: bool = False,
-          self_collision: str = "off", on_frame=None, progress=None) -> DrapeResult:
+          self_collision: str = "off", quality: str = "final", on_frame=None, progress=None) -> DrapeResult:
     """Dress ``body`` in ``pattern`` and animate it.
 
     Parameters
@@ -155,6 +153,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     self_collision : {"off", "auto", "on"}
         Cloth–cloth contact (:class:`~tailor.collide.SelfCollider`) from the moment the garment is
         sewn (during sewing, seam edges must be free to meet).
+    quality : {"draft", "normal", "final"}
+        Implicit step and solver tolerance (:data:`tailor.sim.QUALITY`); ``final`` is the setting
+        the garment tests validate.
     on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
     progress : callable ``progress(phase, done, total)``, optional
 
@@ -193,12 +194,21 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     collider = BodyCollider(collider_frames, body.faces, margin=max(0.03, 2 * thickness))
     walk0 = 1 + keys if keys else 0  # collider index of motion frame 0
     integ = make_integrator(integrator)
+    preset_q = sim_quality(quality)
+    if hasattr(integ, "tolerance"):
+        integ.tolerance = preset_q.tolerance
     report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution,
               "integrator": integrator, "time_step_eq24_s": unwelded.time_step, "phases": {}, "seam_pairs": len(sewing.pairs),
               "fabrics": {p.name: fabrics[i].name for i, p in enumerate(pattern.panels)},
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
+              "quality": {"name": preset_q.name, "max_step_s": preset_q.step, "solver_tolerance": preset_q.tolerance},
               "active": {"bending": unwelded.has_bending, "air": True, "body_collision": True,
-                         "self_collision": self_collision}}
+                         "self_collision": self_collision},
+              "skipped": [reason for cond, reason in (
+                  (not unwelded.has_bending, "bending (every fabric has bending number 0)"),
+                  (self_collision == "off", "self-collision (--self-collision off)"),
+                  (True, "body triangles farther than the contact margin from the cloth (FCL broad phase)"),
+              ) if cond]}
     sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
            "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0, "self": None}
 
@@ -265,7 +275,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     # implicit steps shrink with the mesh: body contact is resolved once a step, so a vertex must not
     # move far compared with its triangles (2 cm jersey at 0.01 s crumpled at the shoulders, 4.9x
     # stretched; at 0.005 s it hangs at 1.8x, as the 4 cm mesh does at 0.01 s)
-    still_dt = min(IMPLICIT_STEP, STEP_PER_RESOLUTION * resolution) if not integ.explicit else None
+    still_dt = min(preset_q.step, preset_q.step_per_resolution * resolution) if not integ.explicit else None
     motion_dt = still_dt
     if body_speed > 0:
         motion_dt = min(still_dt or 0.01, 0.5 * collider.margin / body_speed)

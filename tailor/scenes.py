@@ -25,7 +25,7 @@ from .pattern import Edge, Panel, Pattern
 from .integrators import Contacts, make_integrator
 from .sim import Guard, held_impulse, hold_contacts, simulate
 
-__all__ = ["rectangle", "grid", "sphere", "floor", "run_scene", "SceneResult", "cloth_model"]
+__all__ = ["Setup", "sphere_drop", "two_corner_hang", "SPHERE_FABRIC", "rectangle", "grid", "sphere", "floor", "run_scene", "SceneResult", "cloth_model"]
 
 
 def rectangle(width: float, height: float, name: str = "panel", *, grain: float = 0.5 * math.pi) -> Panel:
@@ -94,7 +94,8 @@ class SceneResult:
 
 def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0, integrator: str = "implicit",
               dt: float | None = None, thickness: float = 0.003, friction: float = 0.4, self_collision: str = "auto",
-              margin: float = 0.01, v0=None, guard: Guard | None = None, on_frame=None, hooks=()) -> SceneResult:
+              margin: float = 0.01, v0=None, guard: Guard | None = None, on_frame=None, hooks=(),
+              forces=None) -> SceneResult:
     """Simulate cloth ``model`` from positions ``x0`` over a static ``body`` = (vertices, faces).
 
     ``self_collision`` is ``auto`` (only regions that can touch), ``on`` or ``off``. Extra
@@ -138,7 +139,7 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
         steps[0] += 1
 
     for _, st in simulate(model, state, duration=duration, frame_rate=fps, integrator=integ, dt=dt,
-                          hooks=[contact, *hooks, count], guard=guard or Guard()):
+                          hooks=[contact, *hooks, count], guard=guard or Guard(), **({"forces": forces} if forces else {})):
         frames.append(st.x.copy())
         if on_frame is not None:
             on_frame(len(frames) - 1, st)
@@ -146,3 +147,57 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
               "max_contact_correction_m": deepest[0],
               "self_collision": selfc.report() if selfc is not None else {"mode": "off"}}
     return SceneResult(frames, model, report)
+
+
+@dataclass
+class Setup:
+    """A reference scene ready to run: cloth model, start positions, rigid body and timing."""
+
+    name: str
+    mesh: GarmentMesh
+    model: object
+    x0: np.ndarray
+    body: tuple | None
+    duration: float = 2.0
+    fps: float = 25.0
+    thickness: float = 0.001
+    friction: float = 0.4
+
+    def run(self, *, integrator: str = "implicit", dt: float | None = None, tolerance: float | None = None,
+            self_collision: str = "off", guard: Guard | None = None, forces=None) -> SceneResult:
+        """Simulate the scene; ``tolerance`` sets the implicit solver's relative residual."""
+        integ = make_integrator(integrator)
+        if tolerance is not None and hasattr(integ, "tolerance"):
+            integ.tolerance = tolerance
+        result = run_scene(self.model, self.x0, body=self.body, duration=self.duration, fps=self.fps, integrator=integ,
+                           dt=dt, thickness=self.thickness, friction=self.friction, self_collision=self_collision,
+                           guard=guard, forces=forces)
+        result.report["cg_iterations"] = int(getattr(integ, "total_iterations", 0))
+        return result
+
+
+SPHERE_FABRIC = Fabric("cotton-150", 0.15, 0.01, 0.01, 8.0, 0.4, 0.001)
+"""The sphere scene's cloth: cotton at 150 g/m² (the areal density of the Blender comparison)."""
+
+
+def sphere_drop(n: int = 64, *, fabric: Fabric = SPHERE_FABRIC, size: float = 1.0, radius: float = 0.25,
+                drop: float = 0.05, duration: float = 2.0) -> Setup:
+    """A ``size`` m square cloth of ``n`` × ``n`` vertices dropped centred onto a sphere of ``radius``.
+
+    The cloth starts flat ``drop`` m above the sphere's top; the sphere is an icosphere of 5 120
+    triangles centred at the origin.
+    """
+    mesh = grid(size, size, n)
+    model = build_model(mesh, fabric)
+    x0 = np.c_[mesh.uv - 0.5 * size, np.full(mesh.vertex_count, radius + drop)]
+    return Setup(f"sphere{n}", mesh, model, x0, sphere(radius), duration, thickness=fabric.thickness, friction=fabric.friction)
+
+
+def two_corner_hang(n: int = 32, *, fabric: Fabric | str = "cotton", size: float = 1.0, duration: float = 2.0) -> Setup:
+    """A ``size`` m square cloth of ``n`` × ``n`` vertices, flat, pinned at its two far corners: it falls and swings."""
+    fabric = preset(fabric) if isinstance(fabric, str) else fabric
+    mesh = grid(size, size, n)
+    corners = [n * (n - 1), n * n - 1]
+    model = build_model(mesh, fabric, pinned=corners)
+    x0 = np.c_[mesh.uv - 0.5 * size, np.full(mesh.vertex_count, 1.5)]
+    return Setup(f"hang{n}", mesh, model, x0, None, duration, thickness=fabric.thickness, friction=fabric.friction)

@@ -1,0 +1,71 @@
+"""Benchmark plots (matplotlib, Agg): the time–error Pareto frontier and the stability map."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .atomic import atomic_write
+
+__all__ = ["pareto_plot", "stability_plot"]
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def pareto_plot(runs, front, path, *, title: str = "") -> None:
+    """Wall time vs mean error of every stable run (one marker per integrator), the frontier as a line."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 5))
+    markers = {"implicit": "o", "symplectic": "s", "verlet": "^", "rk4": "D", "forward": "v"}
+    for integ in dict.fromkeys(r.integrator for r in runs):
+        mine = [r for r in runs if r.integrator == integ and r.stable and math.isfinite(r.error_mean_mm)]
+        if mine:
+            ax.scatter([r.wall_s for r in mine], [max(r.error_mean_mm, 1e-3) for r in mine], marker=markers.get(integ, "o"),
+                       label=integ, alpha=0.8)
+            for r in mine:
+                ax.annotate(f"n{r.resolution} {r.dt:.2g}s {r.label}", (r.wall_s, max(r.error_mean_mm, 1e-3)), fontsize=6,
+                            xytext=(3, 3), textcoords="offset points")
+    if front:
+        ax.plot([r.wall_s for r in front], [max(r.error_mean_mm, 1e-3) for r in front], "k--", lw=1, label="Pareto frontier")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("mean error vs reference [mm]")
+    ax.set_title(title, fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    with atomic_write(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
+def stability_plot(rows, path) -> None:
+    """A grid per integrator: axes × values, green ok, orange unstable (stopped cleanly), red failed."""
+    plt = _pyplot()
+    integrators = list(dict.fromkeys(r[0] for r in rows))
+    axes_names = list(dict.fromkeys(r[1] for r in rows))
+    width = max(sum(1 for r in rows if r[0] == integrators[0] and r[1] == a) for a in axes_names)
+    fig, axs = plt.subplots(1, len(integrators), figsize=(4.5 * len(integrators), 0.6 * len(axes_names) + 1.5), squeeze=False)
+    colour = {"ok": (0.3, 0.75, 0.35), "unstable": (0.95, 0.6, 0.2)}
+    for ax, integ in zip(axs[0], integrators):
+        img = np.ones((len(axes_names), width, 3))
+        for i, a in enumerate(axes_names):
+            cells = [r for r in rows if r[0] == integ and r[1] == a]
+            for j, r in enumerate(cells):
+                img[i, j] = colour.get(r[3], (0.85, 0.15, 0.15))
+                ax.text(j, i, f"{r[2]:g}", ha="center", va="center", fontsize=7)
+        ax.imshow(img, aspect="auto")
+        ax.set_yticks(range(len(axes_names)), axes_names, fontsize=8)
+        ax.set_xticks([])
+        ax.set_title(f"{integ} (green ok, orange stopped unstable, red failed)", fontsize=8)
+    with atomic_write(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
