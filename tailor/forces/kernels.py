@@ -19,8 +19,6 @@ __all__ = [
     "bending_forces_into",
     "membrane_jacobian_into",
     "bending_jacobian_into",
-    "jacobi_pcg",
-    "filtered_pcg",
     "bsr_matvec",
     "block_pcg",
 ]
@@ -265,56 +263,6 @@ def bending_jacobian_into(model, x, positions, kdata, *, stiffness=None) -> None
 
 
 @njit(cache=True)
-def _csr_matvec(indptr, indices, data, x, out):
-    for i in range(len(indptr) - 1):
-        acc = 0.0
-        for p in range(indptr[i], indptr[i + 1]):
-            acc += data[p] * x[indices[p]]
-        out[i] = acc
-
-
-@njit(cache=True)
-def jacobi_pcg(indptr, indices, data, b, x, inv_diag, rtol, max_iterations):
-    """Solve A·x = b for SPD CSR ``A`` by Jacobi-preconditioned conjugate gradients, in place.
-
-    Returns (iterations, converged). Stops when |r| ≤ rtol·|b|.
-    """
-    n = len(b)
-    r = np.empty(n)
-    q = np.empty(n)
-    _csr_matvec(indptr, indices, data, x, q)
-    for i in range(n):
-        r[i] = b[i] - q[i]
-    bnorm = math.sqrt(np.dot(b, b))
-    if bnorm == 0.0:
-        for i in range(n):
-            x[i] = 0.0
-        return 0, True
-    target = rtol * bnorm
-    z = r * inv_diag
-    p = z.copy()
-    rz = np.dot(r, z)
-    for it in range(max_iterations):
-        if math.sqrt(np.dot(r, r)) <= target:
-            return it, True
-        _csr_matvec(indptr, indices, data, p, q)
-        pq = np.dot(p, q)
-        if pq <= 0.0:
-            return it, False
-        alpha = rz / pq
-        for i in range(n):
-            x[i] += alpha * p[i]
-            r[i] -= alpha * q[i]
-            z[i] = r[i] * inv_diag[i]
-        rz_new = np.dot(r, z)
-        beta = rz_new / rz
-        rz = rz_new
-        for i in range(n):
-            p[i] = z[i] + beta * p[i]
-    return max_iterations, math.sqrt(np.dot(r, r)) <= target
-
-
-@njit(cache=True)
 def _filter(v, ids, normals, stick):
     """Remove from ``v`` (3N,) the held part of every constrained vertex: its normal component, or all of it if stuck."""
     for k in range(len(ids)):
@@ -328,55 +276,6 @@ def _filter(v, ids, normals, stick):
         v[i] -= d * normals[k, 0]
         v[i + 1] -= d * normals[k, 1]
         v[i + 2] -= d * normals[k, 2]
-
-
-@njit(cache=True)
-def filtered_pcg(indptr, indices, data, b, x, inv_diag, rtol, max_iterations, ids, normals, stick):
-    """Jacobi-preconditioned CG restricted to the free subspace of contact constraints, in place.
-
-    Baraff & Witkin's modified PCG (1998, §5.3): vertex ``ids[k]`` may not change its velocity
-    along ``normals[k]`` from the value ``x`` holds on entry (the caller sets it to the prescribed
-    one), but moves freely in the tangent plane — or, if ``stick[k]``, may not change it at all
-    (static friction); unconstrained dofs solve A·x = b. Residual and search directions are
-    projected ("filtered") onto the free subspace, so A·x − b on exit is the constraints'
-    reaction: along the normal of a sliding contact, any direction for a stuck one. Returns (iterations, converged); stops
-    when |filtered r| ≤ rtol·|b| (the unconstrained solver's scale).
-    """
-    n = len(b)
-    r = np.empty(n)
-    q = np.empty(n)
-    bnorm = math.sqrt(np.dot(b, b))
-    _csr_matvec(indptr, indices, data, x, q)
-    for i in range(n):
-        r[i] = b[i] - q[i]
-    _filter(r, ids, normals, stick)
-    if bnorm == 0.0:
-        return 0, True
-    target = rtol * bnorm
-    z = r * inv_diag
-    _filter(z, ids, normals, stick)
-    p = z.copy()
-    rz = np.dot(r, z)
-    for it in range(max_iterations):
-        if math.sqrt(np.dot(r, r)) <= target:
-            return it, True
-        _csr_matvec(indptr, indices, data, p, q)
-        _filter(q, ids, normals, stick)
-        pq = np.dot(p, q)
-        if pq <= 0.0:
-            return it, False
-        alpha = rz / pq
-        for i in range(n):
-            x[i] += alpha * p[i]
-            r[i] -= alpha * q[i]
-            z[i] = r[i] * inv_diag[i]
-        _filter(z, ids, normals, stick)
-        rz_new = np.dot(r, z)
-        beta = rz_new / rz
-        rz = rz_new
-        for i in range(n):
-            p[i] = z[i] + beta * p[i]
-    return max_iterations, math.sqrt(np.dot(r, r)) <= target
 
 
 @njit(cache=True, parallel=True)
@@ -416,11 +315,14 @@ def _dot(a, b):
 def block_pcg(bptr, bcol, blocks, b, x, pinv, rtol, max_iterations, ids, normals, stick):
     """Block-Jacobi preconditioned CG on a 3×3 block-CSR matrix, filtered by contacts, in place.
 
-    The same method as :func:`filtered_pcg` (Baraff & Witkin's modified PCG: ``ids`` held along
-    ``normals``, or entirely where ``stick``; none if ``ids`` is empty), but on block storage with
-    one column index per 3×3 block, threaded matrix–vector products, and each vertex's own 3×3
-    diagonal block inverted as preconditioner (``pinv``, (N, 3, 3)). Five times faster per
-    iteration than the scalar CSR loop on a 4k-vertex cloth. Returns (iterations, converged);
+    Baraff & Witkin's modified PCG (1998, §5.3): vertex ``ids[k]`` may not change its velocity
+    along ``normals[k]`` from the value ``x`` holds on entry (the caller sets it to the prescribed
+    one) but moves freely in the tangent plane — or, if ``stick[k]``, may not change it at all
+    (static friction); no constraints if ``ids`` is empty. Residual and search directions are
+    projected ("filtered") onto the free subspace, so A·x − b on exit is the constraints' reaction.
+    Block storage has one column index per 3×3 block; mat-vecs are threaded; each vertex's own
+    3×3 diagonal block, inverted, is the preconditioner (``pinv``, (N, 3, 3)). Five times faster
+    per iteration than a scalar CSR loop on a 4k-vertex cloth. Returns (iterations, converged);
     stops when |filtered r| ≤ rtol·|b|.
     """
     n = len(b)
