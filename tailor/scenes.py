@@ -19,6 +19,7 @@ from .collide import BodyCollider, SelfCollider, SELF_COLLISION_MODES
 from .curves import Curve
 from .errors import SimulationError
 from .fabric import Fabric, preset
+from .forces import total_forces
 from .mesh import GarmentMesh, discretise
 from .model import build_model
 from .pattern import Edge, Panel, Pattern
@@ -139,7 +140,7 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
         steps[0] += 1
 
     for _, st in simulate(model, state, duration=duration, frame_rate=fps, integrator=integ, dt=dt,
-                          hooks=[contact, *hooks, count], guard=guard or Guard(), **({"forces": forces} if forces else {})):
+                          hooks=[contact, *hooks, count], guard=guard or Guard(), forces=forces or total_forces):
         frames.append(st.x.copy())
         if on_frame is not None:
             on_frame(len(frames) - 1, st)
