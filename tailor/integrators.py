@@ -215,7 +215,7 @@ class ImplicitEuler:
         self.contact_impulse = np.zeros(0)
         self.contact_vertex_count = 0
         self.predict = None
-        self.contact_passes = 2
+        self.contact_passes = 4
         self.release_in_step = False
         self.predicted = 0  # contacts added by prediction, and released for pulling, over all steps
         self.released = 0

@@ -11,7 +11,7 @@ import math
 
 import fcl
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ..errors import SimulationUnstable
 
@@ -163,67 +163,74 @@ def points_inside(points, vertices, faces, *, cell: float = 0.02) -> np.ndarray:
     return out
 
 
+@njit(cache=True, inline="always")
+def _dot3(x0, x1, x2, y0, y1, y2):
+    return x0 * y0 + x1 * y1 + x2 * y2
+
+
 @njit(cache=True)
-def _closest_point_triangle(p, a, b, c):
-    """Closest point to p on triangle abc and its barycentric coordinates (Ericson, RTCD 5.1.5)."""
-    ab = b - a
-    ac = c - a
-    ap = p - a
-    d1 = ab @ ap
-    d2 = ac @ ap
+def _closest_barycentric(p, a, b, c):
+    """Barycentric coordinates (u, v, w) of the point of triangle abc closest to p (Ericson, RTCD 5.1.5).
+
+    Scalar arithmetic throughout: no temporary arrays in the innermost loop of the narrow phase.
+    """
+    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    ac0, ac1, ac2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    d1 = _dot3(ab0, ab1, ab2, p[0] - a[0], p[1] - a[1], p[2] - a[2])
+    d2 = _dot3(ac0, ac1, ac2, p[0] - a[0], p[1] - a[1], p[2] - a[2])
     if d1 <= 0.0 and d2 <= 0.0:
-        return a, 1.0, 0.0, 0.0
-    bp = p - b
-    d3 = ab @ bp
-    d4 = ac @ bp
+        return 1.0, 0.0, 0.0  # vertex region a
+    d3 = _dot3(ab0, ab1, ab2, p[0] - b[0], p[1] - b[1], p[2] - b[2])
+    d4 = _dot3(ac0, ac1, ac2, p[0] - b[0], p[1] - b[1], p[2] - b[2])
     if d3 >= 0.0 and d4 <= d3:
-        return b, 0.0, 1.0, 0.0
+        return 0.0, 1.0, 0.0  # vertex region b
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
         v = d1 / (d1 - d3)
-        return a + v * ab, 1.0 - v, v, 0.0
-    cp = p - c
-    d5 = ab @ cp
-    d6 = ac @ cp
+        return 1.0 - v, v, 0.0  # edge ab
+    d5 = _dot3(ab0, ab1, ab2, p[0] - c[0], p[1] - c[1], p[2] - c[2])
+    d6 = _dot3(ac0, ac1, ac2, p[0] - c[0], p[1] - c[1], p[2] - c[2])
     if d6 >= 0.0 and d5 <= d6:
-        return c, 0.0, 0.0, 1.0
+        return 0.0, 0.0, 1.0  # vertex region c
     vb = d5 * d2 - d1 * d6
     if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
         w = d2 / (d2 - d6)
-        return a + w * ac, 1.0 - w, 0.0, w
+        return 1.0 - w, 0.0, w  # edge ac
     va = d3 * d6 - d5 * d4
     if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
         w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        return b + w * (c - b), 0.0, 1.0 - w, w
+        return 0.0, 1.0 - w, w  # edge bc
     denom = 1.0 / (va + vb + vc)
     v = vb * denom
     w = vc * denom
-    return a + ab * v + ac * w, 1.0 - v - w, v, w
+    return 1.0 - v - w, v, w  # face
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal):
-    for i in range(len(ptr) - 1):
+    for i in prange(len(ptr) - 1):
         best = 1e30
+        out_tri[i] = -1
         for k in range(ptr[i], ptr[i + 1]):
             t = tri[k]
             a, b, c = bx[faces[t, 0]], bx[faces[t, 1]], bx[faces[t, 2]]
-            q, u, v, w = _closest_point_triangle(x[i], a, b, c)
-            d = x[i] - q
-            dist2 = d @ d
+            u, v, w = _closest_barycentric(x[i], a, b, c)
+            d0 = x[i, 0] - (u * a[0] + v * b[0] + w * c[0])
+            d1 = x[i, 1] - (u * a[1] + v * b[1] + w * c[1])
+            d2 = x[i, 2] - (u * a[2] + v * b[2] + w * c[2])
+            dist2 = d0 * d0 + d1 * d1 + d2 * d2
             if dist2 < best:
                 best = dist2
-                n = np.cross(b - a, c - a)
-                n = n / max(math.sqrt(n @ n), 1e-300)
-                s = d @ n
-                out_dist[i] = s if s != 0.0 else 0.0
-                if abs(s) < 1e-12:
-                    out_dist[i] = 0.0
+                e0, e1, e2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+                f0, f1, f2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+                n0, n1, n2 = e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0
+                nl = max(math.sqrt(n0 * n0 + n1 * n1 + n2 * n2), 1e-300)
+                n0, n1, n2 = n0 / nl, n1 / nl, n2 / nl
+                s = d0 * n0 + d1 * n1 + d2 * n2
+                out_dist[i] = 0.0 if abs(s) < 1e-12 else s
                 out_tri[i] = t
                 out_bary[i, 0], out_bary[i, 1], out_bary[i, 2] = u, v, w
-                out_normal[i] = n
-        if best == 1e30:
-            out_tri[i] = -1
+                out_normal[i, 0], out_normal[i, 1], out_normal[i, 2] = n0, n1, n2
 
 
 class BodyCollider:
@@ -275,8 +282,10 @@ class BodyCollider:
             if len(moved):
                 anchor = anchor.copy()
                 anchor[moved] = x[moved]
-                keep = ~np.isin(keys // len(self.faces), moved)
-                keys = np.union1d(keys[keep], self._query(x[moved], frame, moved))
+                mask = np.zeros(len(x), bool)
+                mask[moved] = True
+                keys = np.concatenate([keys[~mask[keys // len(self.faces)]], self._query(x[moved], frame, moved)])
+                keys.sort()  # by vertex (the moved vertices' old keys are gone, so no repeats)
                 self._cache = (frame, anchor, keys)
         else:
             keys = self._query(x, frame, np.arange(len(x)))
@@ -304,7 +313,9 @@ class BodyCollider:
         point, tri = sphere_query(points, radius, self._body(frame), per_point=per_point)
         self.queries += 1
         self.queried_points += len(points)
-        return np.unique(np.asarray(ids, np.int64)[point] * len(self.faces) + tri)
+        keys = np.asarray(ids, np.int64)[point] * len(self.faces) + tri
+        keys.sort()  # grouped by vertex is all the CSR needs (a repeated pair would only be tested twice)
+        return keys
 
     def nearest(self, x, body_x, frame: int, *, cache: bool = True):
         """Signed distance [m] (positive outside), triangle, barycentrics and normal per vertex.
