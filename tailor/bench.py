@@ -37,7 +37,7 @@ from .model import build_model
 from .scenes import Setup, grid, sphere_drop, two_corner_hang
 from .sim import QUALITY
 
-__all__ = ["Run", "SCENES", "sweep", "rest_error", "pareto", "write_results", "stability_map", "STABILITY_AXES"]
+__all__ = ["Run", "SCENES", "QUICK_SCENES", "GarmentScene", "sweep", "rest_error", "pareto", "write_results", "stability_map", "STABILITY_AXES"]
 
 
 @dataclass
@@ -79,22 +79,61 @@ class BenchScene:
     description: str
 
 
+@dataclass(frozen=True)
+class GarmentScene:
+    """A garment on the walking mannequin (``tailor drape``); levels are resolutions in mm."""
+
+    name: str
+    pattern: str
+    resolutions: tuple
+    quick_resolutions: tuple
+    description: str
+    frames: int = 25
+    quick_frames: int = 5
+
+    def run(self, resolution_mm, quality, frames):
+        """(final positions, rest uv, panel per vertex, report) of one drape."""
+        from .drape import drape
+        from .io import read_pattern
+        from .io.body_files import read_body
+
+        pattern = read_pattern(Path(__file__).resolve().parents[1] / "panels" / self.pattern)
+        result = drape(pattern, read_body("mannequin-walk"), frames=frames, resolution=resolution_mm * 1e-3,
+                       quality=quality)
+        return result.frames[-1], result.mesh.uv, result.mesh.vertex_panel, result.report
+
+
 SCENES = {
     "sphere": BenchScene("sphere", sphere_drop, (32, 48, 64), (16, 24),
                          "1 m cotton (150 g/m²) dropped onto a sphere r = 0.25 m, 2 s"),
     "hang": BenchScene("hang", two_corner_hang, (24, 32, 48), (12, 16),
                        "1 m cotton pinned at two corners, falling and swinging, 2 s"),
+    "tshirt": GarmentScene("tshirt", "tshirt.json", (40, 30), (50,), "the T-shirt on the walking mannequin, 1 s of walk"),
+    "skirt": GarmentScene("skirt", "skirt.json", (40, 30), (50,), "the skirt on the walking mannequin, 1 s of walk"),
 }
+"""Reference scenes of the sweep by name (grid scenes by vertices per side, garments by mm)."""
+
+QUICK_SCENES = ("sphere", "hang")
+"""What ``tailor bench --quick`` runs by default (the garment scenes take minutes each)."""
 """Reference scenes of the sweep by name."""
 
 
-def rest_error(ref_uv, ref_x, uv, x):
-    """(mean, max) distance [m] between ``x`` and the reference surface at the same rest points ``uv``."""
-    at = LinearNDInterpolator(ref_uv, ref_x)(uv)
-    missing = ~np.isfinite(at).all(axis=1)
-    if missing.any():  # on the boundary, rounding can fall outside the hull
-        at[missing] = NearestNDInterpolator(ref_uv, ref_x)(uv[missing])
-    d = np.linalg.norm(x - at, axis=1)
+def rest_error(ref_uv, ref_x, uv, x, ref_panel=None, panel=None):
+    """(mean, max) distance [m] between ``x`` and the reference surface at the same rest points ``uv``.
+
+    With ``ref_panel``/``panel`` (panel index per vertex) the rest points are matched panel by
+    panel: every panel has its own uv plane.
+    """
+    ref_panel = np.zeros(len(ref_uv), int) if ref_panel is None else np.asarray(ref_panel)
+    panel = np.zeros(len(uv), int) if panel is None else np.asarray(panel)
+    d = np.empty(len(uv))
+    for p in np.unique(panel):
+        r, c = ref_panel == p, panel == p
+        at = LinearNDInterpolator(ref_uv[r], ref_x[r])(uv[c])
+        missing = ~np.isfinite(at).all(axis=1)
+        if missing.any():  # on the boundary, rounding can fall outside the hull
+            at[missing] = NearestNDInterpolator(ref_uv[r], ref_x[r])(uv[c][missing])
+        d[c] = np.linalg.norm(x[c] - at, axis=1)
     return float(d.mean()), float(d.max())
 
 
@@ -136,16 +175,20 @@ def _plan(scene: BenchScene, quick: bool):
     return plan
 
 
-def sweep(names=("sphere", "hang"), *, quick: bool = False, progress=None) -> list[Run]:
+def sweep(names=QUICK_SCENES, *, quick: bool = False, progress=None) -> list[Run]:
     """Run the sweep over the named scenes; ``progress(i, total, run)`` after each run."""
     runs: list[Run] = []
     todo = []
+    garments = [SCENES[n] for n in names if isinstance(SCENES[n], GarmentScene)]
     for name in names:
         scene = SCENES[name]
+        if isinstance(scene, GarmentScene):
+            continue
         ns = scene.quick_resolutions if quick else scene.resolutions
         ref_n = ns[-1] * 2 if not quick else ns[-1] + 8
         todo.append((scene, ("implicit", ref_n, 0.005, 1e-6, "reference")))
         todo += [(scene, p) for p in _plan(scene, quick)]
+    total = len(todo) + sum(1 + len(g.quick_resolutions if quick else g.resolutions) * len(QUALITY) for g in garments)
     setups = {}
     refs = {}
     for i, (scene, (integ, n, dt, tol, label)) in enumerate(todo):
@@ -164,7 +207,42 @@ def sweep(names=("sphere", "hang"), *, quick: bool = False, progress=None) -> li
             run.error_mean_mm, run.error_max_mm = 1e3 * mean, 1e3 * worst
         runs.append(run)
         if progress is not None:
-            progress(i + 1, len(todo), run)
+            progress(i + 1, total, run)
+    for scene in garments:
+        runs += _garment_sweep(scene, quick, progress, len(runs), total)
+    return runs
+
+
+def _garment_sweep(scene: GarmentScene, quick: bool, progress, start: int, total: int) -> list[Run]:
+    levels = scene.quick_resolutions if quick else scene.resolutions
+    frames = scene.quick_frames if quick else scene.frames
+    ref_level = levels[-1] - 10
+    plan = [(ref_level, "final")] + [(lv, q) for lv in levels for q in QUALITY]
+    runs, ref = [], None
+    for k, (level, q) in enumerate(plan):
+        preset_q = QUALITY[q]
+        run = Run(scene.name, "implicit", level, preset_q.step, math.nan, preset_q.tolerance,
+                  "reference" if k == 0 else q)
+        tracemalloc.start()
+        t0 = time.perf_counter()
+        try:
+            x, uv, panel, report = scene.run(level, q, frames)
+        except SimulationUnstable as exc:
+            run.stable, run.note = False, str(exc).split(":")[0]
+        else:
+            run.final, run.uv = x, uv
+            run.eq24_multiple = preset_q.step / report["time_step_eq24_s"]
+            if k == 0:
+                ref = (uv, x, panel)
+            else:
+                mean, worst = rest_error(ref[0], ref[1], uv, x, ref[2], panel)
+                run.error_mean_mm, run.error_max_mm = 1e3 * mean, 1e3 * worst
+        run.wall_s = time.perf_counter() - t0
+        run.peak_mb = tracemalloc.get_traced_memory()[1] / 2**20
+        tracemalloc.stop()
+        runs.append(run)
+        if progress is not None:
+            progress(start + k + 1, total, run)
     return runs
 
 
@@ -177,7 +255,7 @@ def pareto(runs):
 
 
 def _table(runs) -> str:
-    head = "| scene | integrator | n | Δt [s] | × Eq. 24 | tol | preset | wall [s] | steps | CG its | peak MB | stable | mean err [mm] | max err [mm] |"
+    head = "| scene | integrator | n or mm | Δt [s] | × Eq. 24 | tol | preset | wall [s] | steps | CG its | peak MB | stable | mean err [mm] | max err [mm] |"
     lines = [head, "|" + "---|" * 14]
     for r in runs:
         lines.append(

@@ -247,7 +247,7 @@ def _cmd_bench(args) -> int:
         paths = bench.write_stability(rows, out)
         failed = [r for r in rows if r[3] not in ("ok", "unstable")]
     else:
-        names = args.scenes or list(bench.SCENES)
+        names = args.scenes or (list(bench.QUICK_SCENES) if args.quick else list(bench.SCENES))
         unknown = [n for n in names if n not in bench.SCENES]
         if unknown:
             raise TailorError(f"unknown bench scene {unknown[0]!r}; choose from {', '.join(bench.SCENES)}")
@@ -354,7 +354,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=_cmd_drape)
 
     be = sub.add_parser("bench", help="measure speed versus accuracy (or stability at the extremes)")
-    be.add_argument("scenes", nargs="*", metavar="SCENE", help="sphere, hang (default: all)")
+    be.add_argument("scenes", nargs="*", metavar="SCENE",
+                    help="sphere, hang, tshirt, skirt (default: all; with --quick: sphere and hang)")
     be.add_argument("--quick", action="store_true", help="small meshes and few steps (under 3 minutes)")
     be.add_argument("--stability", action="store_true", help="the stability map instead of the sweep")
     be.add_argument("--out", default="out/bench", metavar="DIR", help="output folder (default out/bench)")

@@ -57,3 +57,16 @@ def test_an_explicit_step_far_beyond_eq24_stops_with_the_unstable_error_not_nan(
         run_scene(setup.model, setup.x0, duration=setup.duration, integrator="symplectic", dt=8 * setup.model.time_step,
                   self_collision="off", on_frame=lambda i, st: frames.append(st.x.copy()))
     assert all(np.isfinite(f).all() for f in frames)
+
+
+def test_rest_error_matches_rest_points_panel_by_panel():
+    # two panels share the same uv square but lie 5 cm apart: matched per panel, the error is zero
+    g = grid(0.3, 0.3, 7)
+    uv = np.r_[g.uv, g.uv]
+    panel = np.r_[np.zeros(len(g.uv), int), np.ones(len(g.uv), int)]
+    x = np.c_[uv, 0.05 * panel]
+    fine = grid(0.3, 0.3, 13)
+    ref_uv, ref_panel = np.r_[fine.uv, fine.uv], np.r_[np.zeros(len(fine.uv), int), np.ones(len(fine.uv), int)]
+    ref_x = np.c_[ref_uv, 0.05 * ref_panel]
+    assert bench.rest_error(ref_uv, ref_x, uv, x, ref_panel, panel)[1] < 1e-9
+    assert bench.rest_error(ref_uv, ref_x, uv, x, ref_panel, 1 - panel)[0] == pytest.approx(0.05)
