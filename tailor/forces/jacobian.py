@@ -25,83 +25,62 @@ from .membrane import membrane_gradients
 __all__ = ["SparsePattern", "force_jacobians", "jacobian_data", "jacobian_blocks"]
 
 
-def _block_indices(elements):
-    """Row/column dof indices of every entry of the (3k × 3k) element blocks, shape (E, 3k, 3k)."""
-    dof = (3 * elements[:, :, None] + np.arange(3)[None, None, :]).reshape(len(elements), -1)
-    rows = np.repeat(dof[:, :, None], dof.shape[1], axis=2)
-    cols = np.repeat(dof[:, None, :], dof.shape[1], axis=1)
-    return rows, cols
-
-
 class SparsePattern:
-    """The CSR sparsity of a model's Jacobians and the scatter map of every element entry."""
+    """The CSR sparsity of a model's Jacobians and the scatter map of every element entry.
+
+    Built at the level of vertex pairs (one 3×3 block each, ~9× fewer keys to sort than dofs),
+    so the same layout serves as scalar CSR (``indptr``, ``cols``) and as 3×3 block CSR
+    (``block_indptr``, ``block_cols``): row 3i+a holds, for each neighbour j of vertex i in
+    increasing order, the three entries (3i+a, 3j+b).
+    """
 
     def __init__(self, model):
-        n = 3 * model.vertex_count
-        groups = [model.faces]
-        if model.elastic == "springs":
-            groups = [model.spring_vertices]
+        nv = model.vertex_count
+        n = 3 * nv
+        groups = [np.asarray(model.faces if model.elastic != "springs" else model.spring_vertices, np.int64)]
         if model.has_bending:
-            groups.append(model.hinge_vertices)
+            groups.append(np.asarray(model.hinge_vertices, np.int64))
         self.has_pairs = len(model.pair_vertices) > 0
         if self.has_pairs:
-            groups.append(model.pair_vertices)
-        rows, cols, sizes = [], [], []
-        for g in groups:
-            r, c = _block_indices(np.asarray(g))
-            rows.append(r.reshape(-1))
-            cols.append(c.reshape(-1))
-            sizes.append(r.shape)
-        diag = np.arange(n)
-        rows.append(diag)
-        cols.append(diag)
-        r, c = np.concatenate(rows), np.concatenate(cols)
-        key = r.astype(np.int64) * n + c
-        uniq, self.scatter = np.unique(key, return_inverse=True)
+            groups.append(np.asarray(model.pair_vertices, np.int64))
+        keys = [(g[:, :, None] * nv + g[:, None, :]).reshape(-1) for g in groups]
+        keys.append(np.arange(nv, dtype=np.int64) * (nv + 1))  # every vertex's own block
+        uniq, inverse = np.unique(np.concatenate(keys), return_inverse=True)
+        bi, bj = uniq // nv, uniq % nv
+        deg = np.bincount(bi, minlength=nv)
+        bstart = np.concatenate([[0], np.cumsum(deg)])
+        base = 9 * bstart[bi] + 3 * (np.arange(len(uniq)) - bstart[bi])  # slot of entry (a=0, b=0) of each block
+        stride = 3 * deg[bi]  # from one row of a block to the next
+        a3 = np.arange(3)
+        slots = base[:, None, None] + a3[None, :, None] * stride[:, None, None] + a3[None, None, :]  # (B, 3, 3)
         self.shape = (n, n)
-        self.rows, self.cols = (uniq // n).astype(np.int32), (uniq % n).astype(np.int32)
-        self.nnz = len(uniq)
-        self.entry_count = len(key)
-        self.diagonal_offset = len(key) - n  # the identity entries come last
-        order_csr = np.lexsort((self.cols, self.rows))
-        assert np.all(order_csr == np.arange(self.nnz))  # np.unique already sorts by (row, col)
-        starts = np.cumsum([0] + [int(np.prod(s)) for s in sizes])
-        self.positions = [
-            self.scatter[a:b].reshape(s[0], -1).astype(np.int64) for a, b, s in zip(starts[:-1], starts[1:], sizes)
-        ]
-        """Per element group (faces or springs, then hinges): CSR slot of each block entry, (E, (3k)²)."""
-        self.diagonal_slots = self.scatter[self.diagonal_offset :]
+        self.nnz = 9 * len(uniq)
+        self.rows = np.empty(self.nnz, np.int32)
+        self.cols = np.empty(self.nnz, np.int32)
+        self.rows[slots] = (3 * bi[:, None, None] + a3[None, :, None]).astype(np.int32)
+        self.cols[slots] = (3 * bj[:, None, None] + a3[None, None, :]).astype(np.int32)
+        self.indptr = (9 * np.repeat(bstart[:-1], 3) + np.tile(a3, nv) * np.repeat(3 * deg, 3)).astype(np.int32)
+        self.indptr = np.append(self.indptr, self.nnz).astype(np.int32)
+        self.block_indptr, self.block_cols = bstart.astype(np.int32), bj.astype(np.int32)
+        self._block_slots = slots.reshape(-1)
+        self._diag_block = inverse[-nv:]  # the identity keys came last
+        self.diagonal_slots = slots[self._diag_block][:, a3, a3].reshape(-1)
         """CSR slot of each diagonal entry (dof order)."""
-        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.rows, minlength=n))]).astype(np.int32)
-        self._block_slots = None
-        self._diag_block = None
-
-    def _blocks_map(self):
-        """CSR slot of every entry of the 3×3 block form (−1: structurally zero), built once."""
-        if self._block_slots is None:
-            n = self.shape[0]
-            a = sp.csr_matrix((np.arange(1, self.nnz + 1, dtype=float), self.cols, self.indptr), shape=self.shape).tobsr(
-                blocksize=(3, 3))
-            a.sort_indices()
-            self._block_slots = np.rint(a.data).astype(np.int64).reshape(-1) - 1
-            self.block_indptr = a.indptr.astype(np.int32)
-            self.block_cols = a.indices.astype(np.int32)
-            assert len(self.block_indptr) == n // 3 + 1
-        return self._block_slots
+        self.positions, start = [], 0
+        for g in groups:  # slot of every entry of every element's (3k × 3k) block
+            e, k = g.shape
+            p = inverse[start : start + e * k * k].reshape(e, k, k)
+            start += e * k * k
+            self.positions.append(slots[p].transpose(0, 1, 3, 2, 4).reshape(e, 9 * k * k).astype(np.int64))
+        """Per element group (faces or springs, then hinges, then pairs): CSR slot of each block entry, (E, (3k)²)."""
+        self.scatter = np.concatenate([pos.reshape(-1) for pos in self.positions] + [self.diagonal_slots])
 
     def blocks(self, data) -> np.ndarray:
         """The stored values as 3×3 blocks (B, 3, 3) in the order of ``block_indptr``/``block_cols``."""
-        slots = self._blocks_map()
-        out = np.where(slots >= 0, np.concatenate([data, [0.0]])[slots], 0.0)
-        return out.reshape(-1, 3, 3)
+        return data[self._block_slots].reshape(-1, 3, 3)
 
     def diagonal_blocks(self, blocks) -> np.ndarray:
         """(N, 3, 3) diagonal block of every vertex row."""
-        self._blocks_map()
-        if self._diag_block is None:
-            rows = np.repeat(np.arange(len(self.block_indptr) - 1), np.diff(self.block_indptr))
-            self._diag_block = np.flatnonzero(rows == self.block_cols)
-            assert len(self._diag_block) == len(self.block_indptr) - 1
         return blocks[self._diag_block]
 
     def matrix(self, entries) -> sp.csr_matrix:
