@@ -190,9 +190,8 @@ class ImplicitEuler:
     impulse [N·s] each held vertex received (negative = the body had to pull: release it).
     :attr:`predict`, if set, is ``predict(model, state, x_end, v_end, dt) -> Contacts`` for the
     vertices the solved step would bring within the thickness of the body; they are held too
-    (landing on the surface), held vertices the body would have to pull are released, stuck ones
-    pulled harder than friction allows slide, and the step is solved again, at most
-    :attr:`contact_passes` times. Friction inside the solve matters: a post-step friction that
+    (landing on the surface), stuck ones pulled harder than friction allows slide, and the step is
+    solved again, at most :attr:`contact_passes` times. Friction inside the solve matters: a post-step friction that
     stops vertices the solve let slide leaves their neighbours stretched (2.7× on a sphere at 0.02 s).
     """
 
@@ -216,9 +215,7 @@ class ImplicitEuler:
         self.contact_vertex_count = 0
         self.predict = None
         self.contact_passes = 4
-        self.release_in_step = False
-        self.predicted = 0  # contacts added by prediction, and released for pulling, over all steps
-        self.released = 0
+        self.predicted = 0  # contacts added by prediction, and stuck ones that slipped, over all steps
         self.slipped = 0
         self.contact_stuck = np.zeros(0, bool)
 
@@ -290,26 +287,23 @@ class ImplicitEuler:
         blocks = pattern.blocks(data)
         system = (pattern.block_indptr, pattern.block_cols, blocks, np.linalg.inv(pattern.diagonal_blocks(blocks)))
         iterations, converged = self._solve(system, rhs, dv, v, held)
-        # Active set, a few passes at most: contacts the body pulls on (negative reaction: the cloth
-        # is leaving) are released, stuck ones whose reaction leaves the Coulomb cone slide, and
-        # contacts the step would make are held too, so the cloth lands on the body within the
-        # step instead of being pushed out after it.
+        # Active set, a few passes at most: stuck contacts whose reaction leaves the Coulomb cone
+        # slide, and contacts the step would make are held too, so the cloth lands on the body
+        # within the step instead of being pushed out after it. (Contacts the body pulls on are
+        # released by the collider before the next step.)
         for _ in range(self.contact_passes if converged else 0):
             changed = False
             if len(held):
                 r = self._reactions(system, rhs, dv, held)
                 rn = np.einsum("ij,ij->i", r, held.normals)
-                pull = (rn < 0.0) & self.release_in_step
                 tangential = np.linalg.norm(r - rn[:, None] * held.normals, axis=1)
-                slip = (held.stick > 0) & ~pull & (tangential > held.friction * rn)
-                if pull.any() or slip.any():
+                slip = (held.stick > 0) & (tangential > held.friction * rn)
+                if slip.any():
                     # a slipping contact keeps the friction it had, at its Coulomb limit (kinetic
                     # friction inside the solve, so the neighbours feel it)
                     drag = (held.friction * rn / np.maximum(tangential, 1e-300))[slip, None] * (r - rn[:, None] * held.normals)[slip]
                     np.add.at(rhs.reshape(n, 3), held.ids[slip], drag)
                     held.stick[slip] = 0
-                    held = held.take(~pull)
-                    self.released += int(pull.sum())
                     self.slipped += int(slip.sum())
                     changed = True
             if self.predict is not None:

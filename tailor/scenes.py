@@ -165,14 +165,14 @@ class Setup:
     friction: float = 0.4
 
     def run(self, *, integrator: str = "implicit", dt: float | None = None, tolerance: float | None = None,
-            self_collision: str = "off", guard: Guard | None = None, forces=None) -> SceneResult:
+            self_collision: str = "off", guard: Guard | None = None, forces=None, v0=None) -> SceneResult:
         """Simulate the scene; ``tolerance`` sets the implicit solver's relative residual."""
         integ = make_integrator(integrator)
         if tolerance is not None and hasattr(integ, "tolerance"):
             integ.tolerance = tolerance
         result = run_scene(self.model, self.x0, body=self.body, duration=self.duration, fps=self.fps, integrator=integ,
                            dt=dt, thickness=self.thickness, friction=self.friction, self_collision=self_collision,
-                           guard=guard, forces=forces)
+                           guard=guard, forces=forces, v0=v0)
         result.report["cg_iterations"] = int(getattr(integ, "total_iterations", 0))
         return result
 
