@@ -55,7 +55,7 @@ def stability_plot(rows, path) -> None:
     width = max(sum(1 for r in rows if r[0] == integrators[0] and r[1] == a) for a in axes_names)
     fig, axs = plt.subplots(1, len(integrators), figsize=(4.5 * len(integrators), 0.6 * len(axes_names) + 1.5), squeeze=False)
     colour = {"ok": (0.3, 0.75, 0.35), "unstable": (0.95, 0.6, 0.2)}
-    for ax, integ in zip(axs[0], integrators):
+    for col, (ax, integ) in enumerate(zip(axs[0], integrators)):
         img = np.ones((len(axes_names), width, 3))
         for i, a in enumerate(axes_names):
             cells = [r for r in rows if r[0] == integ and r[1] == a]
@@ -63,9 +63,10 @@ def stability_plot(rows, path) -> None:
                 img[i, j] = colour.get(r[3], (0.85, 0.15, 0.15))
                 ax.text(j, i, f"{r[2]:g}", ha="center", va="center", fontsize=7)
         ax.imshow(img, aspect="auto")
-        ax.set_yticks(range(len(axes_names)), axes_names, fontsize=8)
+        ax.set_yticks(range(len(axes_names)), axes_names if col == 0 else [], fontsize=8)
         ax.set_xticks([])
-        ax.set_title(f"{integ} (green ok, orange stopped unstable, red failed)", fontsize=8)
+        ax.set_title(integ, fontsize=9)
+    fig.suptitle("green: finished; orange: stopped with SimulationUnstable; red: failed", fontsize=9, y=1.04)
     with atomic_write(path, "wb") as fh:
         fig.savefig(fh, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
