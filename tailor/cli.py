@@ -252,9 +252,12 @@ def _cmd_bench(args) -> int:
         if unknown:
             raise TailorError(f"unknown bench scene {unknown[0]!r}; choose from {', '.join(bench.SCENES)}")
         runs = bench.sweep(names, quick=args.quick, progress=progress)
+        saved = bench.savings(quick=args.quick, progress=progress) if "sphere" in names else ()
         if not quiet:
             print(file=sys.stderr)
-        paths = bench.write_results(runs, out)
+        paths = bench.write_results(runs, out, saved)
+        for what, variant, wall, _ in saved:
+            print(f"{what}: {variant} {wall:.2f} s")
         for name in names:
             front = bench.pareto([r for r in runs if r.scene == name])
             print(f"{name}: frontier " + ", ".join(f"{r.label or r.integrator} n{r.resolution} {r.dt:.3g}s "
