@@ -26,7 +26,7 @@ def pareto_plot(runs, front, path, *, title: str = "") -> None:
     fig, ax = plt.subplots(figsize=(7, 5))
     markers = {"implicit": "o", "symplectic": "s", "verlet": "^", "rk4": "D", "forward": "v"}
     for integ in dict.fromkeys(r.integrator for r in runs):
-        mine = [r for r in runs if r.integrator == integ and r.stable and math.isfinite(r.error_mean_mm)]
+        mine = [r for r in runs if r.integrator == integ and r.stable and math.isfinite(r.error_mean_mm) and r.label != "reference"]
         if mine:
             ax.scatter([r.wall_s for r in mine], [max(r.error_mean_mm, 1e-3) for r in mine], marker=markers.get(integ, "o"),
                        label=integ, alpha=0.8)
