@@ -114,6 +114,17 @@ def test_self_collision_runs_once_the_garment_is_sewn():
     assert len(self_intersections(x, weld[result.mesh.faces])) == 0
 
 
+def test_draft_quality_drapes_the_skirt_with_its_larger_step_and_says_so(skirt_static):
+    pattern, body, final = skirt_static
+    result = drape(pattern, body, frames=3, resolution=0.04, quality="draft")
+    q = result.report["quality"]
+    assert q["name"] == "draft" and q["max_step_s"] > final.report["quality"]["max_step_s"]
+    assert result.report["max_penetration_m"] <= 0.002
+    # the draft skirt hangs where the final one does, within a few centimetres
+    assert np.abs(result.frames[-1] - final.frames[-1]).mean() < 0.03
+    assert "self-collision (--self-collision off)" in result.report["skipped"]
+
+
 def test_skirt_waistband_sits_at_the_waist(skirt_static):
     pattern, body, result = skirt_static
     waist = find_landmarks(body.vertices, body.faces)["waist"].height
