@@ -31,7 +31,7 @@ from .measure import find_landmarks
 from .mesh import DEFAULT_RESOLUTION, discretise
 from .model import AIR_DENSITY, build_model
 from .placement import place_panels
-from .integrators import make_integrator
+from .integrators import Contacts, make_integrator
 from .seams import Sewing, merge_state
 from .sim import Guard, quality as sim_quality, held_impulse, hold_contacts, max_stretch, simulate
 
@@ -246,6 +246,16 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         return bx, bv, walk0 + int(round(tb * body.fps)) % body.frame_count
 
     deepest = [0.0]
+
+    def landing(model_, state, x_end, v_end, dt):
+        """Contacts the solved step would make with the body as it is at the step's end (sewn garments)."""
+        if not sim["gravity"]:
+            return None
+        bx, bv, k = body_state(state.t + dt)
+        return Contacts(*collider.landing(model_, x_end, v_end, dt, bx, bv, k, thickness=thickness), model_.vertex_count)
+
+    if hasattr(integ, "predict"):
+        integ.predict = landing
 
     def hook(model_, state, dt):
         bx, bv, k = body_state(state.t)
