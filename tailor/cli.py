@@ -211,11 +211,44 @@ def _cmd_drape(args) -> int:
     if not quiet:
         print(file=sys.stderr)
     write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
+    exported = []
+    for fmt in _formats(args.format):
+        if fmt != "obj":
+            from .io.export import export
+
+            exported += export(result, fmt, out, with_body=args.with_body)
     r = result.report
     print(f"{pattern.source} on {args.body}: {r['vertices']} vertices ({r['welded_vertices']} after sewing), "
           f"{len(result.frames)} frames, max penetration {r['max_penetration_m'] * 1000:.1f} mm, "
           f"seam gap at merge {r['phases']['sewing']['max_gap_at_merge_m'] * 1000:.1f} mm, "
           f"{time.perf_counter() - t0:.1f} s -> {out}/")
+    return 0
+
+
+def _formats(values) -> list[str]:
+    """``--format glb --format usd`` or ``--format glb,usd`` → ['glb', 'usd'], each checked."""
+    from .io.export import FORMATS
+
+    names = [f.strip().lower() for v in values or () for f in v.split(",") if f.strip()]
+    for f in names:
+        if f not in FORMATS:
+            raise TailorError(f"--format: unknown format {f!r}; choose from {', '.join(FORMATS)}")
+    return list(dict.fromkeys(names))
+
+
+def _cmd_export(args) -> int:
+    from .io.export import export, read_run
+
+    formats = _formats(args.format)
+    if not formats:
+        raise TailorError("--format: give at least one of obj, pc2, glb, usd, usda")
+    anim = read_run(args.run, with_body=not args.no_body)
+    out = Path(args.out) if args.out else Path(args.run)
+    for fmt in formats:
+        files = export(anim, fmt, out, with_body=not args.no_body)
+        print(f"{fmt}: {anim.frame_count} frames, {anim.vertex_count} vertices"
+              f"{' + body' if anim.has_body and not args.no_body else ''} -> "
+              + (", ".join(str(f) for f in files) if len(files) <= 4 else f"{out}/ ({len(files)} files)"))
     return 0
 
 
@@ -354,7 +387,19 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--with-body", action="store_true", help="also write the body of every frame")
     d.add_argument("--out", metavar="DIR", help="output folder (default out/<pattern name>)")
     d.add_argument("--overwrite", action="store_true", help="replace an existing output folder")
+    d.add_argument("--format", action="append", metavar="FMT",
+                   help="also export as pc2, glb, usd or usda (repeat or comma-separate; the OBJ frames are always written)")
     d.set_defaults(func=_cmd_drape)
+
+    from .io.export import FORMATS
+
+    ex = sub.add_parser("export", help="export a drape folder as OBJ sequence, PC2, GLB or USD")
+    ex.add_argument("run", metavar="RUN_DIR", help="a folder written by tailor drape")
+    ex.add_argument("--format", action="append", required=True, metavar="FMT",
+                    help=f"one of {', '.join(FORMATS)} (repeat or comma-separate for several)")
+    ex.add_argument("--out", metavar="DIR", help="output folder (default: RUN_DIR)")
+    ex.add_argument("--no-body", action="store_true", help="leave the body out even if the run has it")
+    ex.set_defaults(func=_cmd_export)
 
     be = sub.add_parser("bench", help="measure speed versus accuracy (or stability at the extremes)")
     be.add_argument("scenes", nargs="*", metavar="SCENE",

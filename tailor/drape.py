@@ -197,7 +197,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     preset_q = sim_quality(quality)
     if hasattr(integ, "tolerance"):
         integ.tolerance = preset_q.tolerance
-    report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution,
+    report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution, "fps": fps,
               "integrator": integrator, "time_step_eq24_s": unwelded.time_step, "phases": {}, "seam_pairs": len(sewing.pairs),
               "fabrics": {p.name: fabrics[i].name for i, p in enumerate(pattern.panels)},
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},

@@ -104,3 +104,16 @@ def assert_minus_gradient(potential, forces, model, state, *, wrt="x", eps=1e-7,
             getattr(dn, wrt)[i, k] -= eps
             numeric = -(potential(model, up) - potential(model, dn)) / (2 * eps)
             assert f[i, k] == pytest.approx(numeric, rel=1e-5, abs=1e-8 * np.abs(f).max())
+
+
+@pytest.fixture(scope="session")
+def walk_run(tmp_path_factory):
+    """A small skirt drape on the walking mannequin, written with its body: (DrapeResult, run folder)."""
+    from tailor.drape import drape
+    from tailor.io import read_pattern
+    from tailor.io.body_files import read_body
+    from tailor.io.garment import write_drape
+
+    result = drape(read_pattern(PANELS / "skirt.json"), read_body("mannequin-walk"), frames=3, resolution=0.06,
+                   quality="draft")
+    return result, write_drape(result, tmp_path_factory.mktemp("runs") / "skirt", with_body=True)

@@ -11,7 +11,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write", "write_text_atomic"]
+__all__ = ["atomic_write", "atomic_path", "write_text_atomic"]
 
 
 @contextlib.contextmanager
@@ -44,3 +44,23 @@ def write_text_atomic(path, text: str) -> None:
     """Write ``text`` to ``path`` atomically."""
     with atomic_write(path) as fh:
         fh.write(text)
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yield a temporary path beside ``path`` with the same suffix, for writers that want a file
+    name (a library that saves by name, e.g. USD); on success it is renamed to ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise

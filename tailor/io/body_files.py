@@ -8,7 +8,6 @@ line naming the file. ``mannequin`` and ``mannequin-walk`` name the project's ow
 
 from __future__ import annotations
 
-import struct
 from dataclasses import replace
 from pathlib import Path
 
@@ -17,6 +16,7 @@ import numpy as np
 from ..body import Body, check_body_arrays, normalise_body
 from ..errors import BodyError
 from .atomic import atomic_write
+from .pc2 import read_pc2
 
 __all__ = ["read_body", "write_body_npz", "make_bodies", "BODIES_DIR", "NAMED_BODIES", "read_pc2"]
 
@@ -44,21 +44,6 @@ def _load_mesh(path: Path):
     if any(len(getattr(p, "vertices", ())) for p in parts):
         raise BodyError(f"{path.name}: the mesh has no faces (a point cloud cannot be a body)")
     raise BodyError(f"{path.name}: the mesh is empty (no vertices)")
-
-
-def read_pc2(path, vertex_count: int | None = None) -> np.ndarray:
-    """Frames of a PC2 point cache (Blender/3ds Max), shape (T, N, 3)."""
-    path = Path(path)
-    data = path.read_bytes()
-    if len(data) < 32 or data[:12] != b"POINTCACHE2\0":
-        raise BodyError(f"{path.name}: not a PC2 point cache")
-    _, n, _, _, samples = struct.unpack("<iiffi", data[12:32])
-    if vertex_count is not None and n != vertex_count:
-        raise BodyError(f"{path.name}: {n} points per frame, but the base mesh has {vertex_count} vertices")
-    values = np.frombuffer(data[32:], dtype="<f4")
-    if len(values) != samples * n * 3:
-        raise BodyError(f"{path.name}: truncated ({len(values)} floats for {samples} frames of {n} points)")
-    return values.reshape(samples, n, 3).astype(float)
 
 
 def _named(name: str) -> Body:
@@ -141,7 +126,7 @@ def read_body(source, *, units: str = "auto", up: str = "auto", facing: str = "a
         if base is None:
             raise BodyError(f"{path.name}: a PC2 point cache needs its base mesh (base=…, --base)")
         v, faces = _load_mesh(Path(base))
-        frames = read_pc2(path, len(v))
+        frames = read_pc2(path, len(v), error=BodyError)
     elif path.suffix.lower() in MESH_SUFFIXES:
         v, faces = _load_mesh(path)
         frames = v[None]

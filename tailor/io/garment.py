@@ -12,22 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import TailorError
+from .animation import mtl_text, welded
 from .obj import obj_text
 
 __all__ = ["write_drape"]
-
-_COLOURS = [(0.80, 0.25, 0.25), (0.25, 0.45, 0.85), (0.30, 0.70, 0.35), (0.90, 0.75, 0.20),
-            (0.65, 0.30, 0.75), (0.20, 0.75, 0.75), (0.95, 0.55, 0.25), (0.55, 0.55, 0.55)]
-
-
-def _welded(result, x):
-    """Welded positions (one per merged group) and faces in welded indices."""
-    weld = result.weld
-    n = int(weld.max()) + 1
-    first = np.full(n, -1, np.intp)
-    first[weld[::-1]] = np.arange(len(weld))[::-1]
-    return x[first], weld[result.mesh.faces]
-
 
 def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = False) -> Path:
     """Write ``result`` (:class:`tailor.drape.DrapeResult`) into ``out_dir``.
@@ -45,11 +33,9 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
     try:
         mesh = result.mesh
         names = mesh.panel_names
-        mtl = "".join(f"newmtl {name}\nKd {r:.3f} {g:.3f} {b:.3f}\n\n" for name, (r, g, b) in
-                      zip(names, (_COLOURS[i % len(_COLOURS)] for i in range(len(names)))))
-        (tmp / "garment.mtl").write_text(mtl)
+        (tmp / "garment.mtl").write_text(mtl_text(names))
         for k, x in enumerate(result.frames):
-            xw, faces = _welded(result, x)
+            xw, faces = welded(result.weld, mesh.faces, x)
             text = obj_text(xw, faces, uv=mesh.uv, face_uv=mesh.faces, face_group=mesh.face_panel, group_names=names,
                             mtl="garment.mtl", header=f"tailor drape of {result.pattern.name}, frame {k}")
             (tmp / f"garment_{k:04d}.obj").write_text(text)
@@ -57,6 +43,7 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
                 (tmp / f"body_{k:04d}.obj").write_text(obj_text(result.body_frames[k], result.body_faces))
         report = dict(result.report)
         report["pattern"] = result.pattern.source
+        report["name"] = result.pattern.name
         report["frames_written"] = len(result.frames)
         (tmp / "report.json").write_text(json.dumps(report, indent=2, default=_jsonable))
         if out.exists():
