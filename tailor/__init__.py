@@ -18,7 +18,11 @@ from .io import pattern_from_dict, read_pattern
 from .body import Body
 from .drape import DrapeResult, drape
 from .io.body_files import read_body
+from .io.animation import Animation, read_run
+from .io.draw import draw_pattern
+from .io.export import FORMATS, export
 from .io.garment import write_drape
+from .io.preview import PreviewSettings, preview
 from .measure import Landmark, find_landmarks
 from .mesh import GarmentMesh, discretise
 from .model import Model, State, build_model
@@ -56,4 +60,11 @@ __all__ = [
     "drape",
     "DrapeResult",
     "write_drape",
+    "Animation",
+    "read_run",
+    "export",
+    "FORMATS",
+    "preview",
+    "PreviewSettings",
+    "draw_pattern",
 ]

@@ -80,6 +80,17 @@ def _cmd_mesh(args) -> int:
     return 0
 
 
+def _cmd_draw(args) -> int:
+    from .io import read_pattern
+    from .io.draw import draw_pattern
+
+    pattern = read_pattern(args.pattern)
+    out = Path(args.out) if args.out else Path("out") / f"{pattern.name}.png"
+    draw_pattern(pattern, out, mesh_resolution=args.mesh * 1e-2 if args.mesh else None)
+    print(f"{pattern.source}: {len(pattern.panels)} panels, {len(pattern.seams)} seams -> {out}")
+    return 0
+
+
 def _fabric_from_args(args):
     from .fabric import preset
 
@@ -185,6 +196,7 @@ def _cmd_drape(args) -> int:
     from .io.body_files import read_body
     from .io.garment import write_drape
 
+    formats = _formats(args.format)  # checked before a long run, not after
     pattern = read_pattern(args.pattern)
     out = Path(args.out) if args.out else Path("out") / pattern.name
     if out.exists() and not args.overwrite:
@@ -197,31 +209,92 @@ def _cmd_drape(args) -> int:
         from .fabric import preset
 
         fabric = preset(args.fabric)
-    quiet = args.quiet
-
-    def progress(phase, done, total):
-        if not quiet:
-            print(f"\r  {phase:<8} {done}/{total}", end="", file=sys.stderr, flush=True)
-
+    bars = PhaseBars(disable=args.quiet)
     t0 = time.perf_counter()
-    result = drape(pattern, body, fabric, frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2,
-                   integrator=args.integrator, sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
-                   self_collision=args.self_collision, quality=args.quality,
-                   progress=progress)
-    if not quiet:
-        print(file=sys.stderr)
+    try:
+        result = drape(pattern, body, fabric, frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2,
+                       integrator=args.integrator, sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
+                       self_collision=args.self_collision, quality=args.quality, progress=bars)
+    finally:
+        bars.close()
     write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
-    exported = []
-    for fmt in _formats(args.format):
-        if fmt != "obj":
-            from .io.export import export
+    if any(f != "obj" for f in formats) or args.preview:
+        from .io.animation import animation_from_drape
+        from .io.export import export
 
-            exported += export(result, fmt, out, with_body=args.with_body)
+        anim = animation_from_drape(result, with_body=args.with_body)
+        for fmt in formats:
+            if fmt != "obj":
+                export(anim, fmt, out, with_body=args.with_body)
+        if args.preview:
+            _preview(anim, out / "preview", args)
     r = result.report
     print(f"{pattern.source} on {args.body}: {r['vertices']} vertices ({r['welded_vertices']} after sewing), "
           f"{len(result.frames)} frames, max penetration {r['max_penetration_m'] * 1000:.1f} mm, "
           f"seam gap at merge {r['phases']['sewing']['max_gap_at_merge_m'] * 1000:.1f} mm, "
           f"{time.perf_counter() - t0:.1f} s -> {out}/")
+    return 0
+
+
+class PhaseBars:
+    """Progress of a drape on stderr: one tqdm bar per phase, with simulated time, steps/s and ETA."""
+
+    def __init__(self, disable: bool = False):
+        self.disable, self.bar, self.phase = disable, None, None
+        self.steps0, self.wall0 = 0, time.perf_counter()
+
+    def __call__(self, event) -> None:
+        from tqdm import tqdm
+
+        if event.phase != self.phase:
+            self.close()
+            self.phase, self.steps0, self.wall0 = event.phase, event.steps, time.perf_counter()
+            self.bar = tqdm(total=event.total, desc=f"{event.phase:<10}", unit="pair" if event.phase == "sewing" else "frame",
+                            file=sys.stderr, disable=self.disable, dynamic_ncols=True, leave=True)
+        rate = (event.steps - self.steps0) / max(time.perf_counter() - self.wall0, 1e-9)
+        self.bar.n = event.done
+        self.bar.set_postfix_str(f"t={event.simulated_s:.2f} s, {rate:.0f} steps/s", refresh=False)
+        self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _preview_settings(args):
+    from .io.preview import PreviewSettings
+
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        raise TailorError(f"--size: expected WIDTHxHEIGHT in pixels, got {args.size!r}") from None
+    return PreviewSettings(azimuth=args.azimuth, elevation=args.elevation, width=width, height=height, every=args.every)
+
+
+def _preview(anim, out, args) -> list:
+    from tqdm import tqdm
+
+    from .io.preview import preview
+
+    settings = _preview_settings(args)
+    with tqdm(desc="preview   ", unit="frame", file=sys.stderr, disable=args.quiet, dynamic_ncols=True) as bar:
+        def progress(done, total):
+            bar.total = total
+            bar.update(done - bar.n)
+
+        files = preview(anim, out, settings=settings, gif=not args.no_gif, progress=progress)
+    gifs = [f for f in files if f.suffix == ".gif"]
+    print(f"preview: {len(files) - len(gifs)} frames -> {out}/" + (f", {gifs[0]}" if gifs else ""))
+    return files
+
+
+def _cmd_preview(args) -> int:
+    from .io.animation import read_run
+
+    _preview_settings(args)  # bad options fail before reading the run
+    anim = read_run(args.run, with_body=not args.no_body)
+    _preview(anim, Path(args.out) if args.out else Path(args.run) / "preview", args)
     return 0
 
 
@@ -257,25 +330,23 @@ def _cmd_bench(args) -> int:
 
     from . import bench
 
+    from tqdm import tqdm
+
     out = Path(args.out)
-    quiet = args.quiet
-    t0 = time.perf_counter()
+    bar = tqdm(desc="bench", unit="run", file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
 
     def progress(i, total, item):
-        if quiet:
-            return
-        elapsed = time.perf_counter() - t0
-        eta = elapsed / i * (total - i)
         text = (f"{item.scene} {item.integrator} n={item.resolution} dt={item.dt:.3g} {item.wall_s:.1f}s"
                 if isinstance(item, bench.Run) else f"{item[0]} {item[1]}={item[2]:g} {item[3]}")
-        bar = "#" * int(20 * i / total)
-        print(f"\r[{bar:<20}] {i}/{total} ETA {eta:4.0f}s  {text:<60}", end="", file=sys.stderr, flush=True)
+        if bar.total != total:
+            bar.reset(total=total)
+        bar.update(i - bar.n)
+        bar.set_postfix_str(text)
 
     if args.stability:
         rows = bench.stability_map(integrators=("implicit", "symplectic") if args.quick else ("implicit", "symplectic", "rk4"),
                                    progress=progress)
-        if not quiet:
-            print(file=sys.stderr)
+        bar.close()
         print(bench.stability_text(rows))
         paths = bench.write_stability(rows, out)
         failed = [r for r in rows if r[3] not in ("ok", "unstable")]
@@ -286,8 +357,7 @@ def _cmd_bench(args) -> int:
             raise TailorError(f"unknown bench scene {unknown[0]!r}; choose from {', '.join(bench.SCENES)}")
         runs = bench.sweep(names, quick=args.quick, progress=progress)
         saved = bench.savings(quick=args.quick, progress=progress) if "sphere" in names else ()
-        if not quiet:
-            print(file=sys.stderr)
+        bar.close()
         paths = bench.write_results(runs, out, saved)
         for what, variant, wall, _ in saved:
             print(f"{what}: {variant} {wall:.2f} s")
@@ -301,6 +371,16 @@ def _cmd_bench(args) -> int:
         print(f"tailor: error: {len(failed)} run(s) wrote a non-finite frame or failed otherwise", file=sys.stderr)
         return 2
     return 0
+
+
+def preview_options(parser) -> None:
+    """Camera and picture options shared by ``preview`` and ``drape --preview``."""
+    parser.add_argument("--azimuth", type=float, default=-30.0, metavar="DEG",
+                        help="camera angle around the body (0 = front, 90 = its left; default -30)")
+    parser.add_argument("--elevation", type=float, default=10.0, metavar="DEG", help="camera height angle (default 10)")
+    parser.add_argument("--size", default="360x480", metavar="WxH", help="picture size in pixels (default 360x480)")
+    parser.add_argument("--every", type=int, default=1, metavar="N", help="render every N-th frame (default 1)")
+    parser.add_argument("--no-gif", action="store_true", help="only the PNG frames")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -319,6 +399,13 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--resolution", type=float, default=1.5, metavar="CM", help="target edge length (cm, default 1.5)")
     m.add_argument("--out", metavar="FILE.obj", help="output OBJ (default out/<pattern>.obj)")
     m.set_defaults(func=_cmd_mesh)
+
+    dr = sub.add_parser("draw", help="draw a pattern's flat panels with seams, notches and grain (PNG or SVG)")
+    dr.add_argument("pattern", metavar="PATTERN")
+    dr.add_argument("--out", metavar="FILE", help="a .png or .svg (default out/<pattern>.png)")
+    dr.add_argument("--mesh", type=float, nargs="?", const=2.0, metavar="CM",
+                    help="also draw the triangle mesh (edge length in cm, default 2)")
+    dr.set_defaults(func=_cmd_draw)
 
     from .fabric import DEFAULT_FABRIC, fabric_names
 
@@ -389,6 +476,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--overwrite", action="store_true", help="replace an existing output folder")
     d.add_argument("--format", action="append", metavar="FMT",
                    help="also export as pc2, glb, usd or usda (repeat or comma-separate; the OBJ frames are always written)")
+    d.add_argument("--preview", action="store_true", help="render preview frames and a GIF into OUT/preview")
+    preview_options(d)
     d.set_defaults(func=_cmd_drape)
 
     from .io.export import FORMATS
@@ -400,6 +489,13 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--out", metavar="DIR", help="output folder (default: RUN_DIR)")
     ex.add_argument("--no-body", action="store_true", help="leave the body out even if the run has it")
     ex.set_defaults(func=_cmd_export)
+
+    pv = sub.add_parser("preview", help="render a drape folder to PNG frames and an animated GIF")
+    pv.add_argument("run", metavar="RUN_DIR", help="a folder written by tailor drape (--with-body shows the body)")
+    pv.add_argument("--out", metavar="DIR", help="output folder (default: RUN_DIR/preview)")
+    pv.add_argument("--no-body", action="store_true", help="leave the body out")
+    preview_options(pv)
+    pv.set_defaults(func=_cmd_preview)
 
     be = sub.add_parser("bench", help="measure speed versus accuracy (or stability at the extremes)")
     be.add_argument("scenes", nargs="*", metavar="SCENE",

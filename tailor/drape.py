@@ -35,7 +35,7 @@ from .integrators import Contacts, make_integrator
 from .seams import Sewing, merge_state
 from .sim import Guard, quality as sim_quality, held_impulse, hold_contacts, max_stretch, simulate
 
-__all__ = ["drape", "DrapeResult", "NEAR_SEAM", "NEAR_RATE"]
+__all__ = ["drape", "DrapeResult", "DrapeProgress", "NEAR_SEAM", "NEAR_RATE"]
 
 NEAR_SEAM = 0.08
 """Seam pairs closer than this [m] are pulled by stiff implicit springs."""
@@ -104,6 +104,29 @@ class DrapeResult:
     report: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class DrapeProgress:
+    """What :func:`drape` reports to its ``progress`` callback after every frame.
+
+    Attributes
+    ----------
+    phase : str
+        ``sewing``, ``settling``, ``transition`` (into the motion's first pose) or ``motion``.
+    done, total : int
+        Seam vertex pairs welded (sewing) or frames simulated (other phases) of this phase.
+    simulated_s : float
+        Simulated time so far, all phases [s].
+    steps : int
+        Integrator steps so far, all phases.
+    """
+
+    phase: str
+    done: int
+    total: int
+    simulated_s: float
+    steps: int
+
+
 def _attachment_vertices(pattern, mesh, attachment):
     pi = pattern.panel_index(attachment.panel)
     if attachment.vertex is not None:
@@ -157,7 +180,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         Implicit step and solver tolerance (:data:`tailor.sim.QUALITY`); ``final`` is the setting
         the garment tests validate.
     on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
-    progress : callable ``progress(phase, done, total)``, optional
+    progress : callable ``progress(DrapeProgress)``, optional
+        Called after every frame of every phase.
 
     Raises
     ------
@@ -210,7 +234,12 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
                   (True, "body triangles farther than the contact margin from the cloth (FCL broad phase)"),
               ) if cond]}
     sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
-           "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0, "self": None}
+           "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0, "self": None,
+           "steps": 0}
+
+    def tell(phase, done, total, state):
+        if progress:
+            progress(DrapeProgress(phase, done, total, float(state.t), sim["steps"]))
 
     def rebuild(state_x, state_v):
         """Weld the merged pairs into one particle each and carry the state over (Eq. 17–18)."""
@@ -258,6 +287,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         integ.predict = landing
 
     def hook(model_, state, dt):
+        sim["steps"] += 1
         bx, bv, k = body_state(state.t)
         if sim["attach"] is not None:
             sim["attach"].apply(state, bx, bv)
@@ -350,8 +380,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             rescue(state)
         if record_sewing:
             emit(state, pose)
-        if progress:
-            progress("sewing", len(sewing.pairs) - sewing.open_count, len(sewing.pairs))
+        tell("sewing", len(sewing.pairs) - sewing.open_count, len(sewing.pairs), state)
     if sewing.open_count:
         gaps = np.where(sewing.merged, 0.0, sewing.gaps(state.x[sim["weld"]]))
         w = int(np.argmax(gaps))
@@ -383,10 +412,12 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         wid, first = np.unique(wid, return_index=True)
         sim["attach"] = _Attachments(wid, tri[ok][first], bary[ok][first],
                                      np.maximum(dist[ok][first], thickness), collider.faces)
-    for _ in range(int(round(settle * fps))):
+    settle_frames = int(round(settle * fps))
+    for i in range(settle_frames):
         state = advance(state, frame_dt)
         if record_sewing:
             emit(state, pose)
+        tell("settling", i + 1, settle_frames, state)
     report["phases"]["settling"] = {"simulated_s": settle, "wall_s": time.perf_counter() - t0}
     dressed_stretch = max_stretch(sim["model"], state.x)
     sim["motion_limit"] = max(MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH * dressed_stretch)
@@ -395,10 +426,12 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     t0 = time.perf_counter()
     sim["transition_start"] = state.t
     if keys:
-        for _ in range(int(round(TRANSITION * fps))):
+        transition_frames = int(round(TRANSITION * fps))
+        for i in range(transition_frames):
             state = advance(state, frame_dt)
             if record_sewing:
                 emit(state, body_state(state.t)[0])
+            tell("transition", i + 1, transition_frames, state)
         report["phases"]["transition"] = {"simulated_s": TRANSITION, "wall_s": time.perf_counter() - t0}
     # 4. motion, one frame every 1/fps
     t0 = time.perf_counter()
@@ -412,13 +445,13 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         inside = dist[tri >= 0]
         penetration.append(float(max(0.0, -inside.min())) if len(inside) else 0.0)
         emit(state, bx)
-        if progress:
-            progress("motion", f + 1, frames)
+        tell("motion", f + 1, frames, state)
     report["phases"]["motion"] = {"simulated_s": (frames - 1) / fps, "frames": frames, "wall_s": time.perf_counter() - t0,
                                   "time_step_s": motion_dt, "time_step_still_s": still_dt, "body_max_speed_m_s": body_speed}
     report["max_penetration_m_per_frame"] = penetration
     report["max_penetration_m"] = max(penetration) if penetration else 0.0
     report["wall_s"] = time.perf_counter() - t_start
+    report["steps"] = sim["steps"]
     report["body_bvh_queries"] = collider.queries
     report["max_contact_correction_m"] = deepest[0]  # deepest penetration any step had to undo
     report["vertices_rescued_from_inside_body"] = sim["rescued"]

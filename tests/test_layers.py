@@ -19,7 +19,8 @@ LAYERS = {
     "sim": 7, "scenes": 7, "drape": 7,
     "io": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9,
 }
-OWNERS = {"triangle": {"mesh"}, "fcl": {"collide"}, "meshio": {"io"}, "skimage": {"mannequin"}, "matplotlib": {"io"}}
+OWNERS = {"triangle": {"mesh"}, "fcl": {"collide"}, "meshio": {"io"}, "skimage": {"mannequin"}, "matplotlib": {"io"},
+          "pxr": {"io"}, "PIL": {"io"}, "tqdm": {"cli"}}
 
 
 def _module_key(path: Path) -> str:
