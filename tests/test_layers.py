@@ -55,3 +55,11 @@ def test_layering(path):
             assert LAYERS[target] <= LAYERS[me], f"{me} (layer {LAYERS[me]}) imports {target} (layer {LAYERS[target]})"
         if top in OWNERS:
             assert me in OWNERS[top], f"{me} imports {top}, owned by {OWNERS[top]}"
+
+
+@pytest.mark.parametrize("path", [p for p in SOURCES if _module_key(p) not in ("cli", "__main__")],
+                         ids=lambda p: str(p.relative_to(PKG)))
+def test_the_library_logs_and_never_prints(path):
+    calls = [node.lineno for node in ast.walk(ast.parse(path.read_text()))
+             if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "print"]
+    assert not calls, f"print() at line(s) {calls}: use logging (log = logging.getLogger(__name__))"
