@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from numba import njit, prange
 
@@ -101,6 +100,13 @@ def _bending_range(x, hinges, stiffness, rest, out, start, stop):
 
 
 _CHUNK = 4096  # elements per task: below this one thread does it all (no buffer overhead)
+_MAX_TASKS = 8
+
+
+def _tasks(n: int) -> int:
+    """Tasks for ``n`` elements: fixed by the mesh, not the thread count, so forces are summed in
+    the same order (to the bit) on any machine and in any batch worker."""
+    return min(_MAX_TASKS, n // _CHUNK)
 
 
 @njit(cache=True, parallel=True)
@@ -135,8 +141,8 @@ def membrane_forces_into(model, state, out, *, damping: bool = True, stiffness=N
         k1, k2, k12,
         model.face_damping_warp, model.face_damping_weft, model.face_damping_shear, damping, out,
     )
-    tasks = numba.get_num_threads()
-    if model.face_count >= _CHUNK and tasks > 1:
+    tasks = _tasks(model.face_count)
+    if tasks > 1:
         _membrane_parallel(*args, tasks)
     else:
         _membrane_range(*args, 0, model.face_count)
@@ -147,8 +153,8 @@ def bending_forces_into(model, state, out, *, stiffness=None) -> None:
     k = model.hinge_stiffness if stiffness is None else stiffness
     args = (state.x, model.hinge_vertices, k, model.hinge_rest_angle, out)
     n = len(model.hinge_vertices)
-    tasks = numba.get_num_threads()
-    if n >= _CHUNK and tasks > 1:
+    tasks = _tasks(n)
+    if tasks > 1:
         _bending_parallel(*args, tasks)
     else:
         _bending_range(*args, 0, n)
@@ -303,12 +309,23 @@ def _precondition(pinv, r, z):
         z[3 * i + 2] = pinv[i, 2, 0] * r0 + pinv[i, 2, 1] * r1 + pinv[i, 2, 2] * r2
 
 
+_DOT_CHUNK = 2048
+
+
 @njit(cache=True, parallel=True)
 def _dot(a, b):
-    acc = 0.0
-    for i in prange(len(a)):
-        acc += a[i] * b[i]
-    return acc
+    """a·b summed over fixed chunks, then in order: the same bits whatever the thread count."""
+    chunks = (len(a) + _DOT_CHUNK - 1) // _DOT_CHUNK
+    part = np.zeros(chunks)
+    for c in prange(chunks):
+        acc = 0.0
+        for i in range(c * _DOT_CHUNK, min(len(a), (c + 1) * _DOT_CHUNK)):
+            acc += a[i] * b[i]
+        part[c] = acc
+    total = 0.0
+    for c in range(chunks):
+        total += part[c]
+    return total
 
 
 @njit(cache=True)
