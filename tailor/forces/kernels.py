@@ -106,7 +106,9 @@ _MAX_TASKS = 8
 def _tasks(n: int) -> int:
     """Tasks for ``n`` elements: fixed by the mesh, not the thread count, so forces are summed in
     the same order (to the bit) on any machine and in any batch worker."""
-    return min(_MAX_TASKS, n // _CHUNK)
+    # 2 tasks from 4k elements (measured on 2 cores: 32k faces 0.54 ms vs 0.70 serial, 0.84 at 8
+    # tasks, whose buffers cost more than they save), one more per 64k elements
+    return min(_MAX_TASKS, 2 + n // (16 * _CHUNK)) if n >= _CHUNK else 1
 
 
 @njit(cache=True, parallel=True)
