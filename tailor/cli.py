@@ -325,6 +325,51 @@ def _cmd_export(args) -> int:
     return 0
 
 
+def _cmd_batch(args) -> int:
+    from dataclasses import replace as _replace
+
+    from tqdm import tqdm
+
+    from . import batch
+
+    jobs = batch.read_jobs(args.jobs)
+    if args.timeout is not None:
+        if args.timeout <= 0:
+            raise TailorError(f"--timeout must be positive, got {args.timeout:g}")
+        jobs = [j if "timeout" in j.options else _replace(j, options={**j.options, "timeout": args.timeout}) for j in jobs]
+    client = None
+    if args.scheduler:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise TailorError("tailor batch needs dask.distributed: pip install 'dask[distributed]'") from None
+        try:
+            client = Client(args.scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise TailorError(f"--scheduler {args.scheduler}: cannot connect ({exc})") from None
+    bar = tqdm(total=len(jobs), desc="batch", unit="job", file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+    counts = {"done": 0, "failed": 0}
+
+    def progress(row, finished, total):
+        if bar.total != total:
+            bar.reset(total=total)
+        counts[row["status"]] = counts.get(row["status"], 0) + 1
+        bar.update(1)
+        bar.set_postfix_str(f"done {counts['done']}, failed {counts['failed']}: {row['id']}")
+
+    try:
+        summary = batch.drape_many(jobs, args.out, client=client, workers=args.workers, progress=progress)
+    finally:
+        bar.close()
+        if client is not None:
+            client.close()
+    for row in summary.rows:
+        if row["status"] != "done":
+            print(f"failed: {row['id']}: {row['reason']}", file=sys.stderr)
+    print(f"{summary.text()} -> {Path(args.out) / 'manifest.csv'}")
+    return 0
+
+
 def _cmd_bench(args) -> int:
     from pathlib import Path
 
@@ -496,6 +541,14 @@ def build_parser() -> argparse.ArgumentParser:
     pv.add_argument("--no-body", action="store_true", help="leave the body out")
     preview_options(pv)
     pv.set_defaults(func=_cmd_preview)
+
+    ba = sub.add_parser("batch", help="drape many jobs (patterns × bodies × fabrics) on Dask; resumable")
+    ba.add_argument("jobs", metavar="JOBS", help="a .json or .csv job file")
+    ba.add_argument("--out", required=True, metavar="DIR", help="output folder: one folder per job and manifest.csv")
+    ba.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: one per core)")
+    ba.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing Dask cluster (tcp://host:8786)")
+    ba.add_argument("--timeout", type=float, metavar="S", help="wall-time limit per job, seconds (jobs may set their own)")
+    ba.set_defaults(func=_cmd_batch)
 
     be = sub.add_parser("bench", help="measure speed versus accuracy (or stability at the extremes)")
     be.add_argument("scenes", nargs="*", metavar="SCENE",
