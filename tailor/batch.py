@@ -50,7 +50,7 @@ in seconds of wall time for the whole job."""
 DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": "final", "integrator": "implicit",
             "self_collision": "off", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0}
 
-MANIFEST_FIELDS = ("id", "status", "pattern", "body", "fabric", "wall_s", "vertices", "welded_vertices", "frames",
+MANIFEST_FIELDS = ("id", "status", "pattern", "body", "fabric", "wall_s", "cpu_s", "vertices", "welded_vertices", "frames",
                    "max_penetration_mm", "seam_gap_mm", "reason", "options")
 
 
@@ -214,7 +214,7 @@ def run_job(job: Job, out) -> dict:
     from .io import read_pattern
     from .io.garment import write_drape
 
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     row = {"id": job.id, "status": "failed", "pattern": job.pattern, "body": job.body, "fabric": job.fabric,
            "options": json.dumps(job.options, sort_keys=True), "reason": ""}
     timeout = job.option("timeout")
@@ -240,6 +240,7 @@ def run_job(job: Job, out) -> dict:
         row["reason"] = f"{type(exc).__name__}: {exc}".splitlines()[0]
         log.exception("job %s failed unexpectedly", job.id)
     row["wall_s"] = round(time.perf_counter() - t0, 3)
+    row["cpu_s"] = round(time.process_time() - cpu0, 3)  # all threads of the process (a worker's own included)
     return row
 
 
@@ -315,10 +316,20 @@ def local_cluster(workers: int | None = None):
     if workers < 1:
         raise TailorError(f"--workers must be at least 1, got {workers}")
     threads = str(max(1, cores // workers))
+    env = {"NUMBA_NUM_THREADS": threads, "OMP_NUM_THREADS": "1"}
+    if threads == "1":
+        # measured: GNU OpenMP's spin-waiting (numba's omp layer) in two single-threaded workers on
+        # 2 cores burned 5-8x the CPU of a job (41 s instead of 5 s); passive waiting fixes it, but
+        # slows a worker that does run 2 numba threads (parallel regions wait for a wake-up)
+        env["OMP_WAIT_POLICY"] = "PASSIVE"
     for name in ("distributed", "dask"):  # the cluster's own chatter is not the user's business
         logging.getLogger(name).setLevel(logging.ERROR)
+    import dask
+
+    # the workers' statistical profiler samples every 10 ms and takes the GIL from the job's thread
+    dask.config.set({"distributed.worker.profile.enabled": False})
     return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, scheduler_kwargs={"dashboard": False},
-                        dashboard_address=None, env={"NUMBA_NUM_THREADS": threads, "OMP_NUM_THREADS": "1"},
+                        dashboard_address=None, env=env,
                         silence_logs=logging.ERROR)
 
 
