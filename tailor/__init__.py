@@ -15,6 +15,7 @@ from .errors import (
 )
 from .fabric import PRESETS, Fabric, preset
 from .io import pattern_from_dict, read_pattern
+from .batch import Job, drape_many
 from .body import Body
 from .drape import DrapeResult, drape
 from .io.body_files import read_body
@@ -67,4 +68,6 @@ __all__ = [
     "preview",
     "PreviewSettings",
     "draw_pattern",
+    "Job",
+    "drape_many",
 ]

@@ -36,7 +36,7 @@ from pathlib import Path
 from .errors import TailorError
 
 __all__ = ["Job", "JobTimeout", "read_jobs", "make_jobs", "run_job", "drape_many", "BatchSummary", "MANIFEST_FIELDS",
-           "read_manifest", "OPTIONS"]
+           "read_manifest", "OPTIONS", "connect", "local_cluster"]
 
 log = logging.getLogger(__name__)
 
@@ -303,6 +303,18 @@ class BatchSummary:
         """One line for people."""
         return (f"{self.done} done, {self.failed} failed, {self.skipped} skipped in {self.wall_s:.1f} s on "
                 f"{self.workers} worker(s): {self.throughput_per_min:.2f} garments/min")
+
+
+def connect(address: str):
+    """A ``distributed.Client`` connected to the scheduler at ``address`` (``tcp://host:8786``)."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise TailorError("tailor batch needs dask.distributed: pip install 'dask[distributed]'") from None
+    try:
+        return Client(address, timeout="20s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise TailorError(f"--scheduler {address}: cannot connect ({exc})") from None
 
 
 def local_cluster(workers: int | None = None):

@@ -337,16 +337,7 @@ def _cmd_batch(args) -> int:
         if args.timeout <= 0:
             raise TailorError(f"--timeout must be positive, got {args.timeout:g}")
         jobs = [j if "timeout" in j.options else _replace(j, options={**j.options, "timeout": args.timeout}) for j in jobs]
-    client = None
-    if args.scheduler:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise TailorError("tailor batch needs dask.distributed: pip install 'dask[distributed]'") from None
-        try:
-            client = Client(args.scheduler, timeout="20s")
-        except (OSError, TimeoutError) as exc:
-            raise TailorError(f"--scheduler {args.scheduler}: cannot connect ({exc})") from None
+    client = batch.connect(args.scheduler) if args.scheduler else None
     bar = tqdm(total=len(jobs), desc="batch", unit="job", file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
     counts = {"done": 0, "failed": 0}
 
