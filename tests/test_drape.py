@@ -125,6 +125,15 @@ def test_draft_quality_drapes_the_skirt_with_its_larger_step_and_says_so(skirt_s
     assert "self-collision (--self-collision off)" in result.report["skipped"]
 
 
+def test_draft_sews_a_cotton_tshirt_with_the_tight_solve_then_drapes_with_its_own(mannequin):
+    # sewing is assembly at the same step in every preset: with draft's loose 1e-2 solve the cotton
+    # T-shirt's corners stretched 10x during sewing and the run stopped
+    result = drape(read_pattern(PANELS / "tshirt.json"), mannequin, "cotton", frames=2, resolution=0.04,
+                   quality="draft")
+    assert result.report["quality"]["solver_tolerance"] == 1e-2
+    assert result.report["max_penetration_m"] <= 0.002 and np.isfinite(result.frames[-1]).all()
+
+
 def test_skirt_waistband_sits_at_the_waist(skirt_static):
     pattern, body, result = skirt_static
     waist = find_landmarks(body.vertices, body.faces)["waist"].height
