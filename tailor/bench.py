@@ -18,7 +18,6 @@ Nothing here is a unit test: the numbers are measured side by side in one run on
 from __future__ import annotations
 
 import csv
-import functools
 import io
 import math
 import time
@@ -31,7 +30,6 @@ from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 
 from .errors import SimulationUnstable
 from .fabric import Fabric
-from .forces import total_forces
 from .forces.wind import Wind
 from .model import build_model
 from .scenes import SPHERE_FABRIC, Setup, grid, sphere, sphere_drop, two_corner_hang
@@ -360,10 +358,10 @@ def _stability_cell(integrator, params, *, size, duration):
     body = sphere(0.12, center=(-0.2 - 0.25 * size, 0.0, 1.0 - 0.4 * size), subdivisions=3) if speed else None
     v0 = np.tile([-speed, 0.0, 0.0], (mesh.vertex_count, 1)) if speed else None
     setup = Setup("cell", mesh, model, x0, body, duration)
-    forces = functools.partial(total_forces, wind=Wind(speed=wind, direction=(1.0, 0.0, 0.0), turbulence=0.3)) if wind else None
+    air = Wind(speed=wind, direction=(1.0, 0.0, 0.0), turbulence=0.3) if wind else None
     t0 = time.perf_counter()
     try:
-        result = setup.run(integrator=integrator, dt=STABILITY_STEPS.get(integrator), forces=forces, v0=v0)
+        result = setup.run(integrator=integrator, dt=STABILITY_STEPS.get(integrator), wind=air, v0=v0)
     except SimulationUnstable as exc:
         return "unstable", time.perf_counter() - t0, str(exc)
     frames = np.asarray(result.frames)

@@ -197,6 +197,7 @@ def _cmd_drape(args) -> int:
     from .io.garment import write_drape
 
     formats = _formats(args.format)  # checked before a long run, not after
+    wind = _wind(args.wind, args.turbulence)
     pattern = read_pattern(args.pattern)
     out = Path(args.out) if args.out else Path("out") / pattern.name
     if out.exists() and not args.overwrite:
@@ -214,7 +215,7 @@ def _cmd_drape(args) -> int:
     try:
         result = drape(pattern, body, fabric, frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2,
                        integrator=args.integrator, sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
-                       self_collision=args.self_collision, quality=args.quality, progress=bars)
+                       self_collision=args.self_collision, quality=args.quality, wind=wind, progress=bars)
     finally:
         bars.close()
     write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
@@ -296,6 +297,24 @@ def _cmd_preview(args) -> int:
     anim = read_run(args.run, with_body=not args.no_body)
     _preview(anim, Path(args.out) if args.out else Path(args.run) / "preview", args)
     return 0
+
+
+def _wind(text, turbulence):
+    """``--wind SPEED[,DX,DY,DZ]`` (m/s; direction default +x) → a Wind, or None."""
+    if text is None:
+        return None
+    from .forces.wind import Wind
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise TailorError(f"--wind: expected SPEED or SPEED,DX,DY,DZ (m/s), got {text!r}") from None
+    if len(values) not in (1, 4) or values[0] < 0 or (len(values) == 4 and not any(values[1:])):
+        raise TailorError(f"--wind: expected SPEED >= 0, or SPEED,DX,DY,DZ with a non-zero direction, got {text!r}")
+    if not 0 <= turbulence <= 2:
+        raise TailorError(f"--turbulence: expected 0 to 2, got {turbulence:g}")
+    return Wind(speed=values[0], direction=tuple(values[1:]) if len(values) == 4 else (1.0, 0.0, 0.0),
+                turbulence=turbulence)
 
 
 def _formats(values) -> list[str]:
@@ -506,6 +525,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--self-collision", default="off", choices=["auto", "on", "off"],
                    help="cloth-cloth contact once the garment is sewn: auto = only where it can touch itself "
                         "(default off: edge-edge crossings are not handled yet)")
+    d.add_argument("--wind", metavar="SPEED[,DX,DY,DZ]",
+                   help="wind on the sewn garment, m/s (direction default +x; a breeze 3, a gale 20)")
+    d.add_argument("--turbulence", type=float, default=0.3, help="gust strength relative to the wind speed (default 0.3)")
     d.add_argument("--record-sewing", action="store_true", help="also write the sewing and settling frames")
     d.add_argument("--with-body", action="store_true", help="also write the body of every frame")
     d.add_argument("--out", metavar="DIR", help="output folder (default out/<pattern name>)")

@@ -157,7 +157,7 @@ class _Attachments:
 
 def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DEFAULT_RESOLUTION,
           integrator: str = "implicit", sew_timeout: float = 4.0, settle: float = 1.0, record_sewing: bool = False,
-          self_collision: str = "off", quality: str = "final", on_frame=None, progress=None) -> DrapeResult:
+          self_collision: str = "off", quality: str = "final", wind=None, on_frame=None, progress=None) -> DrapeResult:
     """Dress ``body`` in ``pattern`` and animate it.
 
     Parameters
@@ -179,6 +179,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     quality : {"draft", "normal", "final"}
         Implicit step and solver tolerance (:data:`tailor.sim.QUALITY`); ``final`` is the setting
         the garment tests validate.
+    wind : Wind or (3,) air velocity [m/s], optional
+        Blows on the garment once it is sewn (:class:`tailor.forces.wind.Wind`: turbulent Perlin noise).
     on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
     progress : callable ``progress(DrapeProgress)``, optional
         Called after every frame of every phase.
@@ -229,7 +231,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               "fabrics": {p.name: fabrics[i].name for i, p in enumerate(pattern.panels)},
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
               "quality": {"name": preset_q.name, "max_step_s": preset_q.step, "solver_tolerance": preset_q.tolerance},
-              "active": {"bending": unwelded.has_bending, "air": True, "body_collision": True,
+              "active": {"bending": unwelded.has_bending, "air": True, "wind": wind is not None, "body_collision": True,
                          "self_collision": self_collision},
               "skipped": [reason for cond, reason in (
                   (not unwelded.has_bending, "bending (every fabric has bending number 0)"),
@@ -309,7 +311,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             selfc.respond(sim["self_inv_mass"], state, dt)
 
     def forces(model_, state):
-        return sewing.forces(model_, state, sim["weld"], total_forces(model_, state))
+        return sewing.forces(model_, state, sim["weld"], total_forces(model_, state, wind=wind if sim["gravity"] else None))
 
     # while the body moves, no body point may travel more than half the contact margin in one step
     body_speed = float(np.abs(np.diff(body.frames, axis=0)).max() * body.fps) if moving else 0.0
@@ -405,6 +407,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     sim["gravity"] = True
     if hasattr(integ, "tolerance"):
         integ.tolerance = preset_q.tolerance
+    if hasattr(integ, "wind"):
+        integ.wind = wind  # the solve treats drag relative to this air implicitly
     if held:
         ids = np.unique(np.concatenate(held))
         dist, tri, bary, _ = collider.nearest(state.x[sim["weld"][ids]], pose, 0, cache=False)

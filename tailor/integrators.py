@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SimulationUnstable
+from .forces.external import air_damping
 from .forces.jacobian import SparsePattern, jacobian_data
 from .forces.kernels import block_pcg, bsr_matvec
 from .model import State
@@ -218,6 +219,7 @@ class ImplicitEuler:
         self.predicted = 0  # contacts added by prediction, and stuck ones that slipped, over all steps
         self.slipped = 0
         self.contact_stuck = np.zeros(0, bool)
+        self.wind = None  # the air velocity the forces blow with: drag is implicit relative to it
 
     def reset(self):
         """Forget the warm start (the next solve starts from the explicit estimate)."""
@@ -285,6 +287,10 @@ class ImplicitEuler:
         carried = self.contacts
         held = self._held(model)
         blocks = pattern.blocks(data)
+        if model.air_density > 0.0:  # air drag and wind, implicitly (lumped on the diagonal blocks)
+            drag = air_damping(model, state, self.wind)
+            drag[model.vertex_pinned] = 0.0
+            pattern.add_to_diagonal(blocks, dt * drag)
         system = (pattern.block_indptr, pattern.block_cols, blocks, np.linalg.inv(pattern.diagonal_blocks(blocks)))
         iterations, converged = self._solve(system, rhs, dv, v, held)
         # Active set, a few passes at most: stuck contacts whose reaction leaves the Coulomb cone

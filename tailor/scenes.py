@@ -8,6 +8,7 @@ simulates it with body contact (Carignan Eq. 9–14) and, unless switched off, s
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -96,9 +97,10 @@ class SceneResult:
 def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0, integrator: str = "implicit",
               dt: float | None = None, thickness: float = 0.003, friction: float = 0.4, self_collision: str = "auto",
               margin: float = 0.01, v0=None, guard: Guard | None = None, on_frame=None, hooks=(),
-              forces=None) -> SceneResult:
+              forces=None, wind=None) -> SceneResult:
     """Simulate cloth ``model`` from positions ``x0`` over a static ``body`` = (vertices, faces).
 
+    ``wind`` (a :class:`~tailor.forces.wind.Wind` or air velocity) blows on a model with air.
     ``self_collision`` is ``auto`` (only regions that can touch), ``on`` or ``off``. Extra
     ``hooks(model, state, dt)`` run after the contact responses. Returns a :class:`SceneResult`
     whose report holds the wall time, steps, penetration and what the self-collision pass did.
@@ -121,6 +123,10 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
     inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
     deepest = [0.0]
     integ = make_integrator(integrator) if isinstance(integrator, str) else integrator
+    if wind is not None:
+        forces = forces or functools.partial(total_forces, wind=wind)
+        if hasattr(integ, "wind"):
+            integ.wind = wind
     if body_collider is not None and hasattr(integ, "predict"):
         integ.predict = lambda m, st, x, v, h: Contacts(*body_collider.landing(m, x, v, h, bv, body_vel, 0, thickness=thickness),
                                                         m.vertex_count)
@@ -165,14 +171,14 @@ class Setup:
     friction: float = 0.4
 
     def run(self, *, integrator: str = "implicit", dt: float | None = None, tolerance: float | None = None,
-            self_collision: str = "off", guard: Guard | None = None, forces=None, v0=None) -> SceneResult:
+            self_collision: str = "off", guard: Guard | None = None, forces=None, v0=None, wind=None) -> SceneResult:
         """Simulate the scene; ``tolerance`` sets the implicit solver's relative residual."""
         integ = make_integrator(integrator)
         if tolerance is not None and hasattr(integ, "tolerance"):
             integ.tolerance = tolerance
         result = run_scene(self.model, self.x0, body=self.body, duration=self.duration, fps=self.fps, integrator=integ,
                            dt=dt, thickness=self.thickness, friction=self.friction, self_collision=self_collision,
-                           guard=guard, forces=forces, v0=v0)
+                           guard=guard, forces=forces, v0=v0, wind=wind)
         result.report["cg_iterations"] = int(getattr(integ, "total_iterations", 0))
         return result
 

@@ -279,7 +279,14 @@ def simulate_tearing(cloth: TearableCloth, state, *, duration: float, fps: float
         hooks = (contact, *hooks)
     frame_dt = 1.0 / fps
     model = cloth.model
-    integ = make_integrator(integrator)
+
+    def fresh():
+        it = make_integrator(integrator)
+        if hasattr(it, "wind"):
+            it.wind = wind
+        return it
+
+    integ = fresh()
     if dt is None:
         dt = model.time_step if integ.explicit else min(0.005, frame_dt)
     substeps = max(1, math.ceil(frame_dt / dt - 1e-9))
@@ -306,7 +313,7 @@ def simulate_tearing(cloth: TearableCloth, state, *, duration: float, fps: float
             if torn is not None:
                 state, changed = torn, True
             if changed:
-                integ = make_integrator(integrator)  # its caches belong to the old model
+                integ = fresh()  # its caches belong to the old model
             if not cloth.mesh.face_count:
                 raise SimulationError(f"at t = {state.t:.3f} s no cloth is left (every triangle was cut away)")
             check_state(cloth.model, state, step=step, dt=h, integrator=integ.name, frame=frame, guard=guard,

@@ -25,6 +25,35 @@ def gravity_energy(model, state) -> float:
     return float(-np.dot(model.vertex_mass, state.x @ model.gravity))
 
 
+def air_damping(model, state, wind=None) -> np.ndarray:
+    """−∂f/∂v of :func:`air_forces`, lumped on each vertex: (N, 3, 3), positive semi-definite.
+
+    A face's force −½ρC_d·A·v_n|v_n|·n has the velocity derivative −ρC_d·A·|v_n|·n nᵀ; its corners
+    share it (a third of the force each, the face velocity the mean of theirs), which summed over
+    a row gives ρC_d·A·|v_n|/3·n nᵀ per corner. The implicit integrator adds it to its system so
+    drag and wind stay stable at any step: explicitly, light cloth in an 8 m/s wind (ρ_cloth /
+    (ρ_air·C_d·|v_n|) ≈ 0.02 s) blows up at draft's 0.04 s.
+    """
+    n = model.vertex_count
+    out = np.zeros((n, 3, 3))
+    if model.air_density <= 0.0 or not model.face_count:
+        return out
+    f = model.faces
+    p0, p1, p2 = state.x[f[:, 0]], state.x[f[:, 1]], state.x[f[:, 2]]
+    cross = np.cross(p1 - p0, p2 - p0)
+    area2 = np.linalg.norm(cross, axis=1)
+    normal = cross / np.maximum(area2, 1e-300)[:, None]
+    v_face = (state.v[f[:, 0]] + state.v[f[:, 1]] + state.v[f[:, 2]]) / 3.0
+    if wind is not None:
+        v_face = v_face - (wind((p0 + p1 + p2) / 3.0, state.t) if callable(wind) else np.asarray(wind, float))
+    vn = np.abs(np.einsum("ij,ij->i", v_face, normal))
+    c = model.air_density * model.drag_coefficient * (0.5 * area2) * vn / 3.0
+    block = c[:, None, None] * normal[:, :, None] * normal[:, None, :]
+    for k in range(3):
+        np.add.at(out, f[:, k], block)
+    return out
+
+
 def air_forces(model, state, wind=None, out=None) -> np.ndarray:
     """Normal air force on every face, spread to its corners [N], shape (N, 3).
 

@@ -83,6 +83,10 @@ class SparsePattern:
         """(N, 3, 3) diagonal block of every vertex row."""
         return blocks[self._diag_block]
 
+    def add_to_diagonal(self, blocks, values) -> None:
+        """``blocks`` (from :meth:`blocks`) += ``values`` (N, 3, 3) on every vertex's diagonal block, in place."""
+        blocks[self._diag_block] += values
+
     def matrix(self, entries) -> sp.csr_matrix:
         """CSR matrix from the concatenated element entries (in pattern order, identity slot last)."""
         return self.csr(np.bincount(self.scatter, weights=entries, minlength=self.nnz))
