@@ -52,10 +52,13 @@ picture = None
 for frame, state in simulate_tearing(cloth, cloth.model.state(x0), duration=1.2 if quick else 4.0, fps=25,
                                      integrator="implicit", dt=0.0025, wind=wind):
     write_obj(out / f"frame_{frame:04d}.obj", state.x, cloth.mesh.faces, uv=cloth.mesh.uv)
-    if picture is None and cloth.events and frame * 0.04 >= cloth.events[0][0] + 0.08:  # the rip running
+    if picture is None and cloth.tears >= 15:  # the rip running
         picture = (frame, state.x.copy(), cloth.mesh.faces.copy(), cloth.tears)
         render_views(out / "torn.png", [(picture[1], picture[2], (0.8, 0.25, 0.25))], views=("front",), size=(6, 4),
                      title=f"frame {frame}: {cloth.tears} edges torn")
+if picture is None:
+    render_views(out / "torn.png", [(state.x, cloth.mesh.faces, (0.8, 0.25, 0.25))], views=("front",), size=(6, 4),
+                 title=f"frame {frame}: {cloth.tears} edges torn")
 print(f"{frame + 1} frames in {out}/ ({time.perf_counter() - t0:.1f} s): {cloth.tears} edges torn, "
       f"{cloth.mesh.vertex_count - mesh.vertex_count} vertices split off, first tear at "
       f"{cloth.events[0][0]:.2f} s" if cloth.events else "no tear")
