@@ -380,6 +380,22 @@ def _cmd_batch(args) -> int:
     return 0
 
 
+def _cmd_validate(args) -> int:
+    from tqdm import tqdm
+
+    from .validate import validate
+
+    with tqdm(desc="validate", unit="run", file=sys.stderr, disable=args.quiet, dynamic_ncols=True) as bar:
+        def progress(done, total, text):
+            bar.total = total
+            bar.update(done - bar.n)
+            bar.set_postfix_str(text)
+
+        report = validate(args.out, quick=args.quick, progress=progress)
+    print(f"wrote {report}")
+    return 0
+
+
 def _cmd_bench(args) -> int:
     from pathlib import Path
 
@@ -562,6 +578,11 @@ def build_parser() -> argparse.ArgumentParser:
     ba.add_argument("--scheduler", metavar="ADDRESS", help="run on an existing Dask cluster (tcp://host:8786)")
     ba.add_argument("--timeout", type=float, metavar="S", help="wall-time limit per job, seconds (jobs may set their own)")
     ba.set_defaults(func=_cmd_batch)
+
+    va = sub.add_parser("validate", help="Bottino's drape experiments and the Cusick drape test: a markdown report")
+    va.add_argument("--quick", action="store_true", help="sphere and hanging scenes of fabric A, coarse, 3 Cusick fabrics")
+    va.add_argument("--out", default="out/validation", metavar="DIR", help="output folder (default out/validation)")
+    va.set_defaults(func=_cmd_validate)
 
     be = sub.add_parser("bench", help="measure speed versus accuracy (or stability at the extremes)")
     be.add_argument("scenes", nargs="*", metavar="SCENE",

@@ -8,7 +8,7 @@ import numpy as np
 
 from .atomic import atomic_write
 
-__all__ = ["pareto_plot", "stability_plot"]
+__all__ = ["pareto_plot", "stability_plot", "shadow_plot"]
 
 
 def _pyplot():
@@ -67,6 +67,34 @@ def stability_plot(rows, path) -> None:
         ax.set_xticks([])
         ax.set_title(integ, fontsize=9)
     fig.suptitle("green: finished; orange: stopped with SimulationUnstable; red: failed", fontsize=9, y=1.04)
+    with atomic_write(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
+def shadow_plot(path, results):
+    """Cusick drape shadows seen from above, one panel per result (DC and nodes in the title)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cols = min(5, len(results))
+    rows = math.ceil(len(results) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(2.2 * cols, 2.4 * rows), squeeze=False)
+    for ax, r in zip(axes.ravel(), results):
+        geoms = getattr(r.shadow, "geoms", [r.shadow])
+        for g in geoms:
+            xs, ys = g.exterior.xy
+            ax.fill(np.asarray(xs) * 100, np.asarray(ys) * 100, color=(0.3, 0.3, 0.35))
+        t = np.linspace(0, 2 * np.pi, 100)
+        ax.plot(15 * np.cos(t), 15 * np.sin(t), lw=0.5, color="0.6")
+        ax.plot(9 * np.cos(t), 9 * np.sin(t), lw=0.8, color="white")
+        ax.set_title(f"{r.fabric}: DC {r.drape_coefficient:.2f}, {r.nodes} nodes", fontsize=7)
+        ax.set_aspect("equal")
+        ax.axis("off")
+    for ax in axes.ravel()[len(results):]:
+        ax.axis("off")
     with atomic_write(path, "wb") as fh:
         fig.savefig(fh, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)

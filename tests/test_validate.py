@@ -1,0 +1,65 @@
+"""Validation against real cloth (quick versions): Bottino's sphere and two-point hanging converge
+with resolution, and Cusick drape coefficients order by bending stiffness within (0, 1)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tailor
+from tailor.validate import _run_patch, _shape_distance, bottino_fabric, count_nodes, cusick, drape_coefficient
+
+
+def test_bottino_fabric_models():
+    kes5, kes1, auto = (bottino_fabric("A", m) for m in ("kes5", "kes1", "auto"))
+    assert kes5.kawabata.segments == 5 and kes1.kawabata.segments == 1 and auto.kawabata is None
+    assert auto.density == kes5.density == pytest.approx(0.138)
+    with pytest.raises(ValueError):
+        bottino_fabric("A", "kes3")
+
+
+def test_two_point_hanging_converges_with_resolution():
+    height = {n: np.ptp(_run_patch("hang", bottino_fabric("A", "auto"), n)[1][:, 2]) for n in (11, 21, 31)}
+    assert abs(height[31] - height[21]) < abs(height[21] - height[11])
+    assert abs(height[31] - height[21]) < 0.002
+
+
+def test_sphere_quick_resolutions_agree_and_rest_on_the_sphere():
+    a = _run_patch("sphere", bottino_fabric("A", "kes5"), 11, duration=1.6)
+    b = _run_patch("sphere", bottino_fabric("A", "kes5"), 21, duration=1.6)
+    assert _shape_distance(b[:2], a[:2]) < 0.008
+    r = np.linalg.norm(b[1], axis=1)
+    assert r.min() > 0.045 - 0.001  # nothing inside the 9 cm sphere beyond a millimetre
+
+
+@pytest.mark.slow
+def test_sphere_21_against_31_converges():
+    runs = {n: _run_patch("sphere", bottino_fabric("A", "kes5"), n) for n in (11, 21, 31)}
+    d21 = _shape_distance(runs[31][:2], runs[21][:2])
+    assert d21 < _shape_distance(runs[31][:2], runs[11][:2])
+    assert d21 < 0.0045  # measured 3.9 mm; Bottino's target is 3.5 mm (see the issue note)
+
+
+def test_drape_coefficient_grows_with_bending_and_lies_in_0_1():
+    cotton = tailor.preset("cotton")
+    dc = [cusick(cotton.with_values(bending=c), resolution=0.02, duration=1.5).drape_coefficient for c in (1.0, 8.0, 60.0)]
+    assert 0.0 < dc[0] < dc[1] < dc[2] < 1.0
+
+
+def test_drape_coefficient_and_nodes_of_known_shapes():
+    # a flat specimen covers everything (DC 1); one hanging straight down covers only the disk (DC 0)
+    t = np.linspace(0, 2 * np.pi, 65)[:-1]
+    rings = [0.0, 0.09, 0.15]
+    x = np.concatenate([[[0.0, 0.0, 0.0]]] + [np.c_[r * np.cos(t), r * np.sin(t), np.zeros_like(t)] for r in rings[1:]])
+    fan = [(0, 1 + i, 1 + (i + 1) % 64) for i in range(64)]
+    ring = [(1 + i, 65 + i, 65 + (i + 1) % 64) for i in range(64)] + [(1 + i, 65 + (i + 1) % 64, 1 + (i + 1) % 64) for i in range(64)]
+    faces = np.array(fan + ring)
+    dc, _ = drape_coefficient(x, faces)
+    assert dc == pytest.approx(1.0, abs=0.01)
+    hanging = x.copy()
+    hanging[65:, :2] *= 0.09 / 0.15
+    hanging[65:, 2] = -0.06
+    assert drape_coefficient(hanging, faces)[0] == pytest.approx(0.0, abs=0.01)
+    wavy = x.copy()
+    wavy[65:, :2] *= (1 + 0.1 * np.cos(6 * t))[:, None]
+    assert count_nodes(wavy, np.arange(65, 129)) == 6
