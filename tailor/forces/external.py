@@ -34,10 +34,19 @@ def air_damping(model, state, wind=None) -> np.ndarray:
     drag and wind stay stable at any step: explicitly, light cloth in an 8 m/s wind (ρ_cloth /
     (ρ_air·C_d·|v_n|) ≈ 0.02 s) blows up at draft's 0.04 s.
     """
-    n = model.vertex_count
-    out = np.zeros((n, 3, 3))
+    out = np.zeros((model.vertex_count, 3, 3))
     if model.air_density <= 0.0 or not model.face_count:
         return out
+    area, normal, vn = _face_air(model, state, wind)
+    c = model.air_density * model.drag_coefficient * area * np.abs(vn) / 3.0
+    block = c[:, None, None] * normal[:, :, None] * normal[:, None, :]
+    for k in range(3):
+        np.add.at(out, model.faces[:, k], block)
+    return out
+
+
+def _face_air(model, state, wind):
+    """(area [m²], unit normal, normal velocity relative to the air [m/s]) of every face."""
     f = model.faces
     p0, p1, p2 = state.x[f[:, 0]], state.x[f[:, 1]], state.x[f[:, 2]]
     cross = np.cross(p1 - p0, p2 - p0)
@@ -46,12 +55,7 @@ def air_damping(model, state, wind=None) -> np.ndarray:
     v_face = (state.v[f[:, 0]] + state.v[f[:, 1]] + state.v[f[:, 2]]) / 3.0
     if wind is not None:
         v_face = v_face - (wind((p0 + p1 + p2) / 3.0, state.t) if callable(wind) else np.asarray(wind, float))
-    vn = np.abs(np.einsum("ij,ij->i", v_face, normal))
-    c = model.air_density * model.drag_coefficient * (0.5 * area2) * vn / 3.0
-    block = c[:, None, None] * normal[:, :, None] * normal[:, None, :]
-    for k in range(3):
-        np.add.at(out, f[:, k], block)
-    return out
+    return 0.5 * area2, normal, np.einsum("ij,ij->i", v_face, normal)
 
 
 def air_forces(model, state, wind=None, out=None) -> np.ndarray:
@@ -66,19 +70,10 @@ def air_forces(model, state, wind=None, out=None) -> np.ndarray:
     out = np.zeros_like(state.x) if out is None else out
     if model.air_density <= 0.0:
         return out
-    f = model.faces
-    p0, p1, p2 = state.x[f[:, 0]], state.x[f[:, 1]], state.x[f[:, 2]]
-    cross = np.cross(p1 - p0, p2 - p0)
-    area2 = np.linalg.norm(cross, axis=1)
-    normal = cross / np.maximum(area2, 1e-300)[:, None]
-    v_face = (state.v[f[:, 0]] + state.v[f[:, 1]] + state.v[f[:, 2]]) / 3.0
-    if wind is not None:
-        air = wind((p0 + p1 + p2) / 3.0, state.t) if callable(wind) else np.asarray(wind, float)
-        v_face = v_face - air
-    vn = np.einsum("ij,ij->i", v_face, normal)
-    mag = -0.5 * model.air_density * model.drag_coefficient * (0.5 * area2) * vn * np.abs(vn) / 3.0
+    area, normal, vn = _face_air(model, state, wind)
+    mag = -0.5 * model.air_density * model.drag_coefficient * area * vn * np.abs(vn) / 3.0
     force = normal * mag[:, None]
     n = len(out)
     for k in range(3):
-        out[:, k] += np.bincount(f.reshape(-1), np.repeat(force[:, k], 3), minlength=n)
+        out[:, k] += np.bincount(model.faces.reshape(-1), np.repeat(force[:, k], 3), minlength=n)
     return out
