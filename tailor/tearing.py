@@ -99,6 +99,34 @@ def boundary_loops(faces) -> int:
     return loops
 
 
+def _fan_groups(faces, broken, v) -> list:
+    """The triangles around vertex ``v`` in groups joined through unbroken edges (v, w) (union–find)."""
+    inc = [int(f) for f in np.flatnonzero((faces == v).any(axis=1))]
+    parent = {f: f for f in inc}
+
+    def find(f):
+        while parent[f] != f:
+            parent[f] = parent[parent[f]]
+            f = parent[f]
+        return f
+
+    owner = {}
+    for f in inc:
+        for k in range(3):
+            a, b = faces[f, k], faces[f, (k + 1) % 3]
+            if v not in (a, b) or broken[f, k]:
+                continue
+            w = int(a + b - v)
+            if w in owner:
+                parent[find(f)] = find(owner[w])
+            else:
+                owner[w] = f
+    groups: dict = {}
+    for f in inc:
+        groups.setdefault(find(f), []).append(f)
+    return list(groups.values())
+
+
 class TearableCloth:
     """A cloth mesh that can break and be cut, with its model rebuilt after every change.
 
@@ -179,33 +207,7 @@ class TearableCloth:
         new_origin = []
         next_id = self.mesh.vertex_count
         for v in vertices:
-            inc = np.flatnonzero((faces == v).any(axis=1))
-            if len(inc) < 2:
-                continue
-            parent = {int(f): int(f) for f in inc}
-
-            def find(f):
-                while parent[f] != f:
-                    parent[f] = parent[parent[f]]
-                    f = parent[f]
-                return f
-
-            # faces around v joined through an unbroken edge (v, w)
-            owner = {}
-            for f in inc:
-                for k in range(3):
-                    a, b = faces[f, k], faces[f, (k + 1) % 3]
-                    if v not in (a, b) or self.broken[f, k]:
-                        continue
-                    key = int(a + b - v)
-                    if key in owner:
-                        parent[find(int(f))] = find(owner[key])
-                    else:
-                        owner[key] = int(f)
-            groups: dict = {}
-            for f in inc:
-                groups.setdefault(find(int(f)), []).append(int(f))
-            for members in list(groups.values())[1:]:
+            for members in _fan_groups(faces, self.broken, v)[1:]:
                 for f in members:
                     faces[f][faces[f] == v] = next_id
                 new_origin.append(v)

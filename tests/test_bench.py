@@ -1,6 +1,5 @@
 """The bench's measurements: rest-space error, Pareto frontier, outputs, and the stability corners."""
 
-import math
 
 import numpy as np
 import pytest

@@ -46,7 +46,7 @@ def test_a_strip_pulled_beyond_its_tear_strain_splits_in_two_conserving_mass():
     state.v[right, 0] = 0.2  # pulled at 20 cm/s: 25 % after 0.375 s
     mass = cloth.model.vertex_mass.sum()
     before = None
-    for frame, state in simulate_tearing(cloth, state, duration=0.8, fps=25):
+    for frame, _ in simulate_tearing(cloth, state, duration=0.8, fps=25):
         if frame == 9:
             before = components(cloth.mesh.faces, cloth.mesh.vertex_count)
     assert before == 1  # 0.36 s: stretched 24 %, not yet torn
