@@ -164,3 +164,22 @@ def test_wind_at_a_large_implicit_step_is_stable_because_drag_is_implicit():
                                                      wind=Wind(speed=10.0, direction=(1, 0.5, 0), turbulence=0.3))]
     assert np.isfinite(frames[-1]).all() and max_stretch(cloth.model, frames[-1]) < 2.0  # explicit drag: 63 m/s, stopped
     assert np.abs(frames[-1][:, 1]).max() > 0.05  # it was blown out of its plane
+
+
+def test_air_damping_is_the_lumped_velocity_derivative_of_the_air_force():
+    from tailor.forces.external import air_damping
+
+    mesh, pole, x0 = flag()
+    model = build_model(mesh, COTTON, air_density=AIR_DENSITY)
+    rng = np.random.default_rng(1)
+    state = model.state(x0 + 0.02 * rng.standard_normal(x0.shape), rng.standard_normal(x0.shape))
+    wind = np.array([3.0, 1.0, -0.5])
+    d = air_damping(model, state, wind)
+    h = 1e-6
+    for k in range(3):  # the same velocity change on every vertex: Δf_i = −(Σ_j ∂f_i/∂v_j)·Δv = −D_i·Δv
+        e = np.zeros(3)
+        e[k] = h
+        plus, minus = model.state(state.x, state.v + e), model.state(state.x, state.v - e)
+        df = (air_forces(model, plus, wind) - air_forces(model, minus, wind)) / (2 * h)
+        np.testing.assert_allclose(df, -d[:, :, k], rtol=1e-5, atol=1e-9)
+    assert (np.linalg.eigvalsh(d) > -1e-15).all()  # positive semi-definite: it only damps
