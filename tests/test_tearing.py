@@ -183,3 +183,13 @@ def test_air_damping_is_the_lumped_velocity_derivative_of_the_air_force():
         df = (air_forces(model, plus, wind) - air_forces(model, minus, wind)) / (2 * h)
         np.testing.assert_allclose(df, -d[:, :, k], rtol=1e-5, atol=1e-9)
     assert (np.linalg.eigvalsh(d) > -1e-15).all()  # positive semi-definite: it only damps
+
+
+def test_wind_ramps_from_calm_to_full_strength():
+    w = Wind(speed=10.0, direction=(0, 1, 0), turbulence=0.0, ramp=2.0)
+    pts = np.zeros((2, 3))
+    np.testing.assert_allclose(w(pts, 0.0), 0.0)
+    np.testing.assert_allclose(w(pts, 1.0), [[0, 5.0, 0]] * 2)
+    np.testing.assert_allclose(w(pts, 3.0), [[0, 10.0, 0]] * 2)
+    gusty = Wind(speed=10.0, turbulence=0.3, ramp=2.0)
+    np.testing.assert_allclose(gusty(pts, 1.0), 0.5 * Wind(speed=10.0, turbulence=0.3)(pts, 1.0))

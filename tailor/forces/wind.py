@@ -79,6 +79,8 @@ class Wind:
         Time scale T over which the pattern changes [s].
     seed : int
         Seed of the noise permutation (same seed, same wind).
+    ramp : float
+        Seconds over which the wind rises linearly from calm to full strength (0: full from the start).
     """
 
     speed: float = 5.0
@@ -87,20 +89,26 @@ class Wind:
     gust_size: float = 0.5
     gust_time: float = 0.7
     seed: int = 0
+    ramp: float = 0.0
     _perms: tuple = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self):
         rng = np.random.default_rng(self.seed)
         object.__setattr__(self, "_perms", tuple(rng.permutation(256) for _ in range(3)))
 
+    def strength(self, t: float) -> float:
+        """Fraction of full strength at time ``t`` (the ramp)."""
+        return 1.0 if self.ramp <= 0.0 else min(1.0, max(0.0, t / self.ramp))
+
     def __call__(self, points, t: float) -> np.ndarray:
         d = np.asarray(self.direction, float)
         d = d / np.linalg.norm(d)
         mean = self.speed * d
         pts = np.asarray(points, float)
+        a = self.strength(t)
         if self.turbulence == 0.0 or self.speed == 0.0:
-            return np.tile(mean, (len(pts), 1))
+            return np.tile(a * mean, (len(pts), 1))
         advected = (pts - mean * t) / self.gust_size
         q = np.column_stack([advected, np.full(len(pts), t / self.gust_time)])
         noise = np.column_stack([perlin(q + 17.0 * k, perm) for k, perm in enumerate(self._perms)])
-        return mean + self.speed * self.turbulence * noise
+        return a * (mean + self.speed * self.turbulence * noise)
