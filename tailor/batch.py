@@ -29,7 +29,7 @@ import os
 import re
 import shutil
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
@@ -208,6 +208,19 @@ def _body(source: str):
     return read_body(source)
 
 
+def _row(job: Job, status: str, **fields) -> dict:
+    """A manifest row of ``job``: its inputs, ``status`` and ``fields``."""
+    return {"id": job.id, "status": status, "pattern": job.pattern, "body": job.body, "fabric": job.fabric,
+            "options": json.dumps(job.options, sort_keys=True), "reason": "", **fields}
+
+
+def _measures(report: dict, frames) -> dict:
+    """The manifest's numbers from a drape's report (``DrapeResult.report`` or its ``report.json``)."""
+    return {"vertices": report.get("vertices", ""), "welded_vertices": report.get("welded_vertices", ""),
+            "frames": frames, "max_penetration_mm": round(report.get("max_penetration_m", 0.0) * 1e3, 3),
+            "seam_gap_mm": round(report["phases"]["sewing"]["max_gap_at_merge_m"] * 1e3, 3)}
+
+
 def run_job(job: Job, out) -> dict:
     """Run one job and write ``out/<job.id>/``; never raises: returns its manifest row."""
     from .drape import drape
@@ -215,8 +228,7 @@ def run_job(job: Job, out) -> dict:
     from .io.garment import write_drape
 
     t0, cpu0 = time.perf_counter(), time.process_time()
-    row = {"id": job.id, "status": "failed", "pattern": job.pattern, "body": job.body, "fabric": job.fabric,
-           "options": json.dumps(job.options, sort_keys=True), "reason": ""}
+    row = _row(job, "failed")
     timeout = job.option("timeout")
 
     def progress(event):
@@ -230,10 +242,7 @@ def run_job(job: Job, out) -> dict:
                        quality=job.option("quality"), self_collision=job.option("self_collision"),
                        sew_timeout=job.option("sew_timeout"), progress=progress)
         write_drape(result, Path(out) / job.id, overwrite=True, with_body=job.option("with_body"))
-        r = result.report
-        row.update(status="done", vertices=r["vertices"], welded_vertices=r["welded_vertices"],
-                   frames=len(result.frames), max_penetration_mm=round(r["max_penetration_m"] * 1e3, 3),
-                   seam_gap_mm=round(r["phases"]["sewing"]["max_gap_at_merge_m"] * 1e3, 3))
+        row.update(status="done", **_measures(result.report, len(result.frames)))
     except TailorError as exc:
         row["reason"] = str(exc).splitlines()[0]
     except Exception as exc:  # a bug in one job must not stop the batch; the row keeps what it was
@@ -276,11 +285,7 @@ def _done_row(job: Job, out: Path, previous: dict) -> dict | None:
         r = json.loads(report.read_text())
     except ValueError:
         return None
-    return {"id": job.id, "status": "done", "pattern": job.pattern, "body": job.body, "fabric": job.fabric,
-            "options": json.dumps(job.options, sort_keys=True), "wall_s": r.get("wall_s", ""),
-            "vertices": r.get("vertices", ""), "welded_vertices": r.get("welded_vertices", ""),
-            "frames": r.get("frames_written", ""), "max_penetration_mm": round(r.get("max_penetration_m", 0) * 1e3, 3),
-            "seam_gap_mm": round(r["phases"]["sewing"]["max_gap_at_merge_m"] * 1e3, 3), "reason": ""}
+    return _row(job, "done", wall_s=r.get("wall_s", ""), **_measures(r, r.get("frames_written", "")))
 
 
 @dataclass
@@ -403,8 +408,7 @@ def _run_on(client, todo, out, rows, jobs, progress) -> None:
         try:
             row = future.result()
         except Exception as exc:  # the worker died (memory, signal): record it, keep going
-            row = {**asdict(job), "id": job.id, "status": "failed", "options": json.dumps(job.options, sort_keys=True),
-                   "reason": f"worker lost: {type(exc).__name__}: {exc}".splitlines()[0]}
+            row = _row(job, "failed", reason=f"worker lost: {type(exc).__name__}: {exc}".splitlines()[0])
         rows[job.id] = row
         _write_manifest(out, [rows[j.id] for j in jobs if j.id in rows])
         if progress:

@@ -237,6 +237,22 @@ def _cmd_drape(args) -> int:
     return 0
 
 
+def _bar(desc: str, unit: str, quiet: bool):
+    """A tqdm bar on stderr and ``update(done, total, text="")`` moving it to ``done`` of ``total``."""
+    from tqdm import tqdm
+
+    bar = tqdm(desc=desc, unit=unit, file=sys.stderr, disable=quiet, dynamic_ncols=True)
+
+    def update(done, total, text=""):
+        if bar.total != total:
+            bar.reset(total=total)
+        bar.update(done - bar.n)
+        if text:
+            bar.set_postfix_str(text)
+
+    return bar, update
+
+
 class PhaseBars:
     """Progress of a drape on stderr: one tqdm bar per phase, with simulated time, steps/s and ETA."""
 
@@ -274,17 +290,12 @@ def _preview_settings(args):
 
 
 def _preview(anim, out, args) -> list:
-    from tqdm import tqdm
-
     from .io.preview import preview
 
     settings = _preview_settings(args)
-    with tqdm(desc="preview   ", unit="frame", file=sys.stderr, disable=args.quiet, dynamic_ncols=True) as bar:
-        def progress(done, total):
-            bar.total = total
-            bar.update(done - bar.n)
-
-        files = preview(anim, out, settings=settings, gif=not args.no_gif, progress=progress)
+    bar, update = _bar("preview", "frame", args.quiet)
+    with bar:
+        files = preview(anim, out, settings=settings, gif=not args.no_gif, progress=update)
     gifs = [f for f in files if f.suffix == ".gif"]
     print(f"preview: {len(files) - len(gifs)} frames -> {out}/" + (f", {gifs[0]}" if gifs else ""))
     return files
@@ -347,8 +358,6 @@ def _cmd_export(args) -> int:
 def _cmd_batch(args) -> int:
     from dataclasses import replace as _replace
 
-    from tqdm import tqdm
-
     from . import batch
 
     jobs = batch.read_jobs(args.jobs)
@@ -357,15 +366,12 @@ def _cmd_batch(args) -> int:
             raise TailorError(f"--timeout must be positive, got {args.timeout:g}")
         jobs = [j if "timeout" in j.options else _replace(j, options={**j.options, "timeout": args.timeout}) for j in jobs]
     client = batch.connect(args.scheduler) if args.scheduler else None
-    bar = tqdm(total=len(jobs), desc="batch", unit="job", file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+    bar, update = _bar("batch", "job", args.quiet)
     counts = {"done": 0, "failed": 0}
 
     def progress(row, finished, total):
-        if bar.total != total:
-            bar.reset(total=total)
         counts[row["status"]] = counts.get(row["status"], 0) + 1
-        bar.update(1)
-        bar.set_postfix_str(f"done {counts['done']}, failed {counts['failed']}: {row['id']}")
+        update(finished, total, f"done {counts['done']}, failed {counts['failed']}: {row['id']}")
 
     try:
         summary = batch.drape_many(jobs, args.out, client=client, workers=args.workers, progress=progress)
@@ -381,38 +387,24 @@ def _cmd_batch(args) -> int:
 
 
 def _cmd_validate(args) -> int:
-    from tqdm import tqdm
-
     from .validate import validate
 
-    with tqdm(desc="validate", unit="run", file=sys.stderr, disable=args.quiet, dynamic_ncols=True) as bar:
-        def progress(done, total, text):
-            bar.total = total
-            bar.update(done - bar.n)
-            bar.set_postfix_str(text)
-
-        report = validate(args.out, quick=args.quick, progress=progress)
+    bar, update = _bar("validate", "run", args.quiet)
+    with bar:
+        report = validate(args.out, quick=args.quick, progress=update)
     print(f"wrote {report}")
     return 0
 
 
 def _cmd_bench(args) -> int:
-    from pathlib import Path
-
     from . import bench
 
-    from tqdm import tqdm
-
     out = Path(args.out)
-    bar = tqdm(desc="bench", unit="run", file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+    bar, update = _bar("bench", "run", args.quiet)
 
     def progress(i, total, item):
-        text = (f"{item.scene} {item.integrator} n={item.resolution} dt={item.dt:.3g} {item.wall_s:.1f}s"
-                if isinstance(item, bench.Run) else f"{item[0]} {item[1]}={item[2]:g} {item[3]}")
-        if bar.total != total:
-            bar.reset(total=total)
-        bar.update(i - bar.n)
-        bar.set_postfix_str(text)
+        update(i, total, f"{item.scene} {item.integrator} n={item.resolution} dt={item.dt:.3g} {item.wall_s:.1f}s"
+               if isinstance(item, bench.Run) else f"{item[0]} {item[1]}={item[2]:g} {item[3]}")
 
     if args.stability:
         rows = bench.stability_map(integrators=("implicit", "symplectic") if args.quick else ("implicit", "symplectic", "rk4"),
