@@ -173,7 +173,8 @@ def _cmd_body_make(args) -> int:
 
     base = MEASUREMENT_PRESETS[args.preset]
     m = with_measurements(base, height=args.height, bust=args.bust, waist=args.waist, hips=args.hips,
-                          arm_length=args.arm_length, shoulder_width=args.shoulder_width, arm_angle=args.arm_angle)
+                          arm_length=args.arm_length, shoulder_width=args.shoulder_width, arm_angle=args.arm_angle,
+                          shoulder_slope=args.shoulder_slope)
     rest, walk = make_bodies(args.out, m, frames=args.frames)
     print(f"wrote {rest} and {walk} ({args.frames} frames, 1 s walk cycle)")
     return 0
@@ -503,6 +504,8 @@ def build_parser() -> argparse.ArgumentParser:
     for name in ("height", "bust", "waist", "hips", "arm-length", "shoulder-width"):
         bm.add_argument(f"--{name}", type=float, metavar="CM")
     bm.add_argument("--arm-angle", type=float, metavar="DEG", help="arms below horizontal (default 45.5)")
+    bm.add_argument("--shoulder-slope", type=float, metavar="DEG",
+                    help="fall of the shoulder line from the neck to the shoulder tip (default 21.7)")
     bm.add_argument("--frames", type=int, default=25, help="frames of the 1 s walk (25 fps)")
     bm.add_argument("--out", default="bodies", metavar="DIR")
     bm.set_defaults(func=_cmd_body_make)
@@ -530,9 +533,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--quality", default="final", choices=["draft", "normal", "final"],
                    help="speed/accuracy of the implicit step (default final; see `tailor bench`)")
     d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
-    d.add_argument("--self-collision", default="off", choices=["auto", "on", "off"],
-                   help="cloth-cloth contact once the garment is sewn: auto = only where it can touch itself "
-                        "(default off: edge-edge crossings are not handled yet)")
+    d.add_argument("--self-collision", default="auto", choices=["auto", "on", "off"],
+                   help="cloth-cloth contact once the garment is sewn: auto (default) = only where it can "
+                        "touch itself, on = everywhere, off = none")
     d.add_argument("--wind", metavar="SPEED[,DX,DY,DZ]",
                    help="wind on the sewn garment, m/s (direction default +x; a breeze 3, a gale 20)")
     d.add_argument("--turbulence", type=float, default=0.3, help="gust strength relative to the wind speed (default 0.3)")

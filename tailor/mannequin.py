@@ -30,7 +30,9 @@ class Measurements:
     """Tape measurements of a body [m] and the arms' pose angle [rad].
 
     Heights are derived from lengths the way GarmentCode's body parameters are: the shoulder
-    line sits ``head`` below the top of the head, bust, waist, hips and crotch follow downwards.
+    line sits ``head`` below the top of the head at the neck and falls ``shoulder_slope``
+    (GarmentCode's ``shoulder_incl``) towards the shoulder tips; bust, waist, hips and crotch
+    follow downwards.
     """
 
     height: float = 1.7199
@@ -44,6 +46,7 @@ class Measurements:
     shoulder_width: float = 0.364568
     arm_length: float = 0.539697
     arm_angle: float = 45.483 * DEG
+    shoulder_slope: float = 21.6777 * DEG
     head: float = 0.263262
     shoulder_to_bust: float = 0.256947
     shoulder_to_waist: float = 0.368913
@@ -63,6 +66,11 @@ class Measurements:
     @property
     def shoulder_z(self) -> float:
         return self.height - self.head
+
+    @property
+    def acromion_z(self) -> float:
+        """Height of the shoulder tip: the shoulder line falls ``shoulder_slope`` from the neck outwards."""
+        return self.shoulder_z - math.tan(self.shoulder_slope) * 0.5 * max(self.shoulder_width - self.neck_width, 0.0)
 
     @property
     def bust_z(self) -> float:
@@ -94,7 +102,7 @@ MEASUREMENT_PRESETS = {
     "woman": Measurements(),
     "man": Measurements(
         height=1.78, bust=1.00, underbust=0.93, waist=0.86, hips=0.99, thigh=0.56, neck_width=0.21,
-        wrist=0.175, shoulder_width=0.44, arm_length=0.58, head=0.27, shoulder_to_bust=0.22,
+        wrist=0.175, shoulder_width=0.44, arm_length=0.58, shoulder_slope=20.0 * DEG, head=0.27, shoulder_to_bust=0.22,
         shoulder_to_waist=0.40, waist_to_hips=0.20, hips_to_crotch=0.09,
     ),
 }
@@ -159,6 +167,8 @@ class _Torso:
     a: np.ndarray  # half widths
     b: np.ndarray  # half depths
     y: np.ndarray  # centre offsets along y (+ = back)
+    slope: float = 0.0  # fall of the top per unit |x| beyond the neck (tan of the shoulder slope)
+    neck: float = 0.0  # half width of the level top at the neck
 
     def sdf(self, p):
         from scipy.interpolate import PchipInterpolator
@@ -169,7 +179,8 @@ class _Torso:
         cy = PchipInterpolator(self.z, self.y)(z)
         rho = np.sqrt((p[:, 0] / a) ** 2 + ((p[:, 1] - cy) / b) ** 2)
         side = (rho - 1.0) * np.minimum(a, b)
-        caps = np.maximum(self.z[0] - p[:, 2], p[:, 2] - self.z[-1])
+        top = self.z[-1] - self.slope * np.maximum(np.abs(p[:, 0]) - self.neck, 0.0)
+        caps = np.maximum(self.z[0] - p[:, 2], p[:, 2] - top)
         return np.maximum(side, caps)
 
 
@@ -193,7 +204,7 @@ def _torso_rings(m: Measurements, scale=None) -> _Torso:
         a.append(aa)
         b.append(bb)
         y.append(cy)
-    return _Torso(np.array(z), np.array(a), np.array(b), np.array(y))
+    return _Torso(np.array(z), np.array(a), np.array(b), np.array(y), math.tan(m.shoulder_slope), 0.5 * m.neck_width)
 
 
 def _skeleton(m: Measurements) -> dict:
@@ -208,7 +219,7 @@ def _skeleton(m: Measurements) -> dict:
     upper, fore = 0.54 * m.arm_length, 0.46 * m.arm_length
     for side, sx in (("l", 1.0), ("r", -1.0)):
         d = np.array([sx * math.cos(down), 0.0, -math.sin(down)])
-        sh = np.array([sx * (0.5 * m.shoulder_width - 0.035), 0.012, m.shoulder_z - 0.045])
+        sh = np.array([sx * (0.5 * m.shoulder_width - 0.035), 0.012, m.acromion_z - 0.04])
         j[f"{side}_shoulder"] = sh
         j[f"{side}_elbow"] = sh + upper * d
         j[f"{side}_wrist"] = sh + (upper + fore) * d
@@ -451,5 +462,5 @@ def walk_cycle(mannequin: Mannequin, *, frames: int = 25, period: float = 1.0) -
 
 def with_measurements(base: Measurements, **cm_values) -> Measurements:
     """A copy of ``base`` with some measurements replaced, given in cm (angles in degrees)."""
-    values = {k: (v * DEG if k == "arm_angle" else v * CM) for k, v in cm_values.items() if v is not None}
+    values = {k: (v * DEG if k in ("arm_angle", "shoulder_slope") else v * CM) for k, v in cm_values.items() if v is not None}
     return replace(base, **values)
