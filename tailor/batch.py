@@ -48,7 +48,7 @@ OPTIONS = {
 in seconds of wall time for the whole job."""
 
 DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": "final", "integrator": "implicit",
-            "self_collision": "off", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0}
+            "self_collision": "auto", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0}
 
 MANIFEST_FIELDS = ("id", "status", "pattern", "body", "fabric", "wall_s", "cpu_s", "vertices", "welded_vertices", "frames",
                    "max_penetration_mm", "seam_gap_mm", "reason", "options")

@@ -157,7 +157,7 @@ class _Attachments:
 
 def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DEFAULT_RESOLUTION,
           integrator: str = "implicit", sew_timeout: float = 4.0, settle: float = 1.0, record_sewing: bool = False,
-          self_collision: str = "off", quality: str = "final", wind=None, on_frame=None, progress=None) -> DrapeResult:
+          self_collision: str = "auto", quality: str = "final", wind=None, on_frame=None, progress=None) -> DrapeResult:
     """Dress ``body`` in ``pattern`` and animate it.
 
     Parameters
@@ -173,9 +173,10 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         Mesh edge length [m].
     record_sewing : bool
         Also return the sewing and settling as frames (before frame 0).
-    self_collision : {"off", "auto", "on"}
+    self_collision : {"auto", "on", "off"}
         Cloth–cloth contact (:class:`~tailor.collide.SelfCollider`) from the moment the garment is
-        sewn (during sewing, seam edges must be free to meet).
+        sewn (during sewing, seam edges must be free to meet); ``auto`` (default) checks only the
+        regions that can touch themselves.
     quality : {"draft", "normal", "final"}
         Implicit step and solver tolerance (:data:`tailor.sim.QUALITY`); ``final`` is the setting
         the garment tests validate.

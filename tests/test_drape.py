@@ -122,7 +122,8 @@ def test_draft_quality_drapes_the_skirt_with_its_larger_step_and_says_so(skirt_s
     assert result.report["max_penetration_m"] <= 0.002
     # the draft skirt hangs where the final one does, within a few centimetres
     assert np.abs(result.frames[-1] - final.frames[-1]).mean() < 0.03
-    assert "self-collision (--self-collision off)" in result.report["skipped"]
+    assert result.report["active"]["self_collision"] == "auto"  # the default
+    assert result.report["self_collision"]["mode"] == "auto" and result.report["self_collision"]["steps"] > 0
 
 
 def test_draft_sews_a_cotton_tshirt_with_the_tight_solve_then_drapes_with_its_own(mannequin):

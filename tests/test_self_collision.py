@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from tailor.collide import SelfCollider, self_intersections
+from tailor.model import State
 from tailor.scenes import cloth_model, floor, rectangle, run_scene, sphere
 
 
@@ -78,24 +79,65 @@ def test_auto_skips_flat_cloth_far_from_itself():
     assert len(collider.active_faces(folded)) > 0
 
 
-def test_two_panels_on_a_sphere_intersect_far_less_than_without():
-    model, x0 = stacked(0.02, 0.125)
-    counts = {}
-    for mode in ("off", "on"):
-        result = run_scene(model, x0, body=sphere(0.12), duration=0.4, self_collision=mode)
-        counts[mode] = intersections(result.frames[-1:], model.faces)[0]
-    assert counts["off"] > 300
-    assert counts["on"] < 0.2 * counts["off"]
+def sphere_drop(size, resolution, duration, mode):
+    model, x0 = stacked(0.02, 0.125, size=size, resolution=resolution)
+    result = run_scene(model, x0, body=sphere(0.12), duration=duration, self_collision=mode)
+    return intersections(result.frames, model.faces)
 
 
-def test_strip_piling_up_on_the_floor_is_sub_stepped_instead_of_tangling():
-    mesh, model = cloth_model([rectangle(0.1, 0.8, "strip")], "jersey", 0.025)
+def strip_drop(length, duration, mode):
+    """A jersey strip held on end in a wave, dropped on the floor: it piles up and folds on itself."""
+    mesh, model = cloth_model([rectangle(0.1, length, "strip")], "jersey", 0.025)
     x0 = np.column_stack([mesh.uv[:, 0], 0.02 * np.sin(12 * mesh.uv[:, 1]), mesh.uv[:, 1] + 0.01])
+    result = run_scene(model, x0, body=floor(), duration=duration, self_collision=mode)
+    return intersections(result.frames, model.faces), result.report["self_collision"]
+
+
+@pytest.mark.parametrize("mode", ["on", "auto"])
+def test_two_panels_dropped_on_a_sphere_never_intersect(mode):
+    assert sphere_drop(0.3, 0.03, 0.3, mode) == [0] * 9
+    if mode == "on":
+        assert max(sphere_drop(0.3, 0.03, 0.3, "off")) > 100  # the scene does make them cross
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["on", "auto"])
+def test_two_large_panels_dropped_on_a_sphere_never_intersect(mode):
+    counts = sphere_drop(0.4, 0.025, 0.4, mode)
+    assert counts == [0] * len(counts)
+
+
+@pytest.mark.parametrize("mode", ["on", "auto"])
+def test_strip_piling_up_on_the_floor_never_passes_through_itself(mode):
+    counts, report = strip_drop(0.5, 0.4, mode)
+    assert counts == [0] * len(counts)
+    assert report["max_substeps"] > 1  # its top falls several thicknesses a step: sub-stepped
+    if mode == "on":
+        assert max(strip_drop(0.5, 0.4, "off")[0]) > 100  # without the pass it does
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["on", "auto"])
+def test_long_strip_piling_up_on_the_floor_never_passes_through_itself(mode):
+    counts, _ = strip_drop(0.8, 0.6, mode)
+    assert counts == [0] * len(counts)
+
+
+def test_edge_edge_crossing_is_caught():
+    """Two triangles whose edges are about to cross with no vertex over the other triangle:
+    only the edge–edge pair sees it, and its impulse conserves momentum."""
+    faces = np.array([[0, 1, 2], [3, 4, 5]])
+    x = np.array([[-0.01, 0.0, 0.0], [0.01, 0.0, 0.0], [0.005, 0.01, 0.0],  # lower: edge 0-1 along x
+                  [0.0, -0.008, 0.004], [0.0, 0.012, 0.004], [0.0, -0.005, 0.01]])  # upper: edge 3-4 along y, 4 mm up
+    v = np.zeros_like(x)
+    v[3:, 2] = -1.0  # the upper triangle falls through the lower one's edge within the step
     counts = {}
-    for mode in ("off", "on"):
-        result = run_scene(model, x0, body=floor(), duration=0.6, self_collision=mode)
-        counts[mode] = intersections(result.frames[-1:], model.faces)[0]
-        if mode == "on":
-            assert result.report["self_collision"]["max_substeps"] > 1  # its top falls several thicknesses a step
-    assert counts["off"] > 500
-    assert counts["on"] < 0.3 * counts["off"]
+    for edges in (False, True):
+        state = State(x.copy(), v.copy())
+        collider = SelfCollider(faces, np.zeros(2, int), x, thickness=0.003, mode="on", edges=edges)
+        counts[edges] = collider.respond(np.ones(6), state, 0.01)
+    assert counts[False] == 0 and counts[True] > 0
+    # the closest points (middle of 0-1, 40 % along 3-4) now close only the 1 mm to the thickness this step
+    closing = 0.5 * (state.v[0, 2] + state.v[1, 2]) - (0.6 * state.v[3, 2] + 0.4 * state.v[4, 2])
+    assert closing <= (0.004 - 0.003) / 0.01 + 1e-6
+    np.testing.assert_allclose(state.v.sum(axis=0), v.sum(axis=0), atol=1e-12)
