@@ -11,9 +11,10 @@ threshold distance from the cloth's vertices") runs in three stages:
    neighbourhood (Volino & Magnenat-Thalmann's normal-cone argument). Flat cloth is skipped.
 2. **Broad phase**: a sphere of radius ``thickness + reach`` around every active vertex is
    collided (FCL) with a hierarchy over the active triangles (rebuilt: python-fcl cannot refit).
-   ``reach`` is ``margin`` plus three times the last step's largest relative displacement. The
-   candidates stay valid while no vertex has moved more than ``reach / 2`` relative to the
-   cloth's centroid since the query (two points then approach by less than ``reach``).
+   ``reach`` is ``margin`` plus twice the last step's largest relative displacement (a pair that
+   crossed in it lies no deeper). The candidates stay valid while no vertex has moved more than
+   ``reach / 2`` relative to the cloth's centroid since the query (two points then approach by
+   less than ``reach``).
 3. **Narrow phase** (compiled): a vertex whose projection falls on a candidate triangle not at the
    vertex is a contact if it is nearer than ``thickness``, if its velocity would bring it nearer
    within the next step, or if it crossed the triangle's plane since the last step (judged by the
@@ -57,7 +58,7 @@ import time
 import fcl
 import numpy as np
 import scipy.sparse as sp
-from numba import njit
+from numba import njit, prange
 
 from ..errors import SimulationUnstable
 from .body import bvh_object, manager_contacts, sphere_query
@@ -93,62 +94,85 @@ def _classify(gap, closing, travelled, thickness, reach):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _d(x, i, j):
+    """x[i] − x[j] as a tuple (no array allocated in the compiled loops)."""
+    return x[i, 0] - x[j, 0], x[i, 1] - x[j, 1], x[i, 2] - x[j, 2]
+
+
+@njit(cache=True, inline="always")
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True, inline="always")
+def _cross(a, b):
+    return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True, inline="always")
 def _store(k, out_i, out_a, out_n, out_h, i0, i1, i2, i3, a0, a1, a2, a3, n, h):
     out_i[k, 0], out_i[k, 1], out_i[k, 2], out_i[k, 3] = i0, i1, i2, i3
     out_a[k, 0], out_a[k, 1], out_a[k, 2], out_a[k, 3] = a0, a1, a2, a3
-    out_n[k] = n
+    out_n[k, 0], out_n[k, 1], out_n[k, 2] = n[0], n[1], n[2]
     out_h[k] = h
 
 
-@njit(cache=True)
-def _detect(x, xp, vel, dt, faces, ptr, tri, near, thickness, reach, out_i, out_a, out_n, out_h):
-    """Vertex–triangle contacts among the candidates; returns their count.
+@njit(cache=True, parallel=True)
+def _detect(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
+    """Vertex–triangle contacts among the candidates (vertex ``vtx[k]``, triangle ``tri[k]``).
 
-    Each contact is a stencil of four vertices with signed weights α summing to zero, the gap
-    being (Σαᵢxᵢ)·n with ``n`` pointing to the side the vertex was on before this step (side
-    memory): vertex p over triangle abc at barycentrics (u, v, w) has α = (1, −u, −v, −w).
-    Contacts are in contact, predicted or crossed (:func:`_classify`) over ``dt``. Pairs flagged
-    ``near`` (the triangle touches the vertex's 1-ring) keep only :data:`NEAR_THICKNESS` of the
-    thickness: at a sharp bend or a seam corner they are close without touching, but a tight fold
-    can still pass through. Each contact's kept distance goes to ``out_h``.
+    Candidate k, if a contact, fills slot k of the outputs and sets ``hit[k]`` (one slot each, so
+    the result does not depend on the thread count). Each contact is a stencil of four vertices
+    with signed weights α summing to zero, the gap being (Σαᵢxᵢ)·n with ``n`` pointing to the side
+    the vertex was on before this step (side memory): vertex p over triangle abc at barycentrics
+    (u, v, w) has α = (1, −u, −v, −w). Contacts are in contact, predicted or crossed
+    (:func:`_classify`) over ``dt``. Pairs flagged ``near`` (the triangle touches the vertex's
+    1-ring) keep only :data:`NEAR_THICKNESS` of the thickness: at a sharp bend or a seam corner they
+    are close without touching, but a tight fold can still pass through. Each contact's kept
+    distance goes to ``out_h``.
     """
-    count = 0
-    for p in range(len(ptr) - 1):
-        for k in range(ptr[p], ptr[p + 1]):
-            t = tri[k]
-            a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
-            # vertex p against the face
-            e1 = x[b] - x[a]
-            e2 = x[c] - x[a]
-            n = np.cross(e1, e2)
-            nn = math.sqrt(n @ n)
-            if nn > 1e-300:
-                n = n / nn
-                d = x[p] - x[a]
-                s_prev = (xp[p] - xp[a]) @ np.cross(xp[b] - xp[a], xp[c] - xp[a])
-                s_now = d @ n
-                side = (1.0 if s_prev > 0.0 else -1.0) if s_prev != 0.0 else (1.0 if s_now >= 0.0 else -1.0)
-                d11, d12, d22 = e1 @ e1, e1 @ e2, e2 @ e2
-                den = d11 * d22 - d12 * d12
-                if den > 0.0:
-                    r1, r2 = d @ e1, d @ e2
-                    v = (d22 * r1 - d12 * r2) / den
-                    w = (d11 * r2 - d12 * r1) / den
-                    u = 1.0 - v - w
-                    if u >= 0.0 and v >= 0.0 and w >= 0.0:
-                        rv = vel[p] - (u * vel[a] + v * vel[b] + w * vel[c])
-                        moved = (x[p] - xp[p]) - (u * (x[a] - xp[a]) + v * (x[b] - xp[b]) + w * (x[c] - xp[c]))
-                        h = NEAR_THICKNESS * thickness if near[k] else thickness
-                        if _classify(side * s_now, -1.5 * dt * side * (rv @ n), math.sqrt(moved @ moved), h, reach):
-                            _store(count, out_i, out_a, out_n, out_h, p, a, b, c, 1.0, -u, -v, -w, side * n, h)
-                            count += 1
-    return count
+    for k in prange(len(tri)):
+        hit[k] = False
+        p, t = vtx[k], tri[k]
+        a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
+        e1, e2 = _d(x, b, a), _d(x, c, a)
+        n = _cross(e1, e2)
+        nn = math.sqrt(_dot(n, n))
+        if nn <= 1e-300:
+            continue
+        n = (n[0] / nn, n[1] / nn, n[2] / nn)
+        d = _d(x, p, a)
+        s_prev = _dot(_d(xp, p, a), _cross(_d(xp, b, a), _d(xp, c, a)))
+        s_now = _dot(d, n)
+        side = (1.0 if s_prev > 0.0 else -1.0) if s_prev != 0.0 else (1.0 if s_now >= 0.0 else -1.0)
+        d11, d12, d22 = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
+        den = d11 * d22 - d12 * d12
+        if den <= 0.0:
+            continue
+        r1, r2 = _dot(d, e1), _dot(d, e2)
+        v = (d22 * r1 - d12 * r2) / den
+        w = (d11 * r2 - d12 * r1) / den
+        u = 1.0 - v - w
+        if u < 0.0 or v < 0.0 or w < 0.0:
+            continue
+        rv_n = 0.0
+        moved2 = 0.0
+        for q in range(3):
+            rv_n += (vel[p, q] - (u * vel[a, q] + v * vel[b, q] + w * vel[c, q])) * n[q]
+            m = (x[p, q] - xp[p, q]) - (u * (x[a, q] - xp[a, q]) + v * (x[b, q] - xp[b, q]) + w * (x[c, q] - xp[c, q]))
+            moved2 += m * m
+        h = NEAR_THICKNESS * thickness if near[k] else thickness
+        if _classify(side * s_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
+            _store(k, out_i, out_a, out_n, out_h, p, a, b, c, 1.0, -u, -v, -w,
+                   (side * n[0], side * n[1], side * n[2]), h)
+            hit[k] = True
 
 
-@njit(cache=True)
-def _detect_edges(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, count):
-    """Edge–edge contacts among the candidate ``pairs`` (E, 4) = (a0, a1, b0, b1); returns the new count.
+@njit(cache=True, parallel=True)
+def _detect_edges(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+    """Edge–edge contacts among the candidate ``pairs`` (E, 4) = (a0, a1, b0, b1); pair k uses slot
+    ``offset + k`` of the outputs and of ``hit``.
 
     Two edges can pass through each other with no vertex ever near a triangle (sheets sliding
     across each other, a boundary edge cutting through a layer). Their closest points
@@ -159,37 +183,64 @@ def _detect_edges(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, o
     it) or that are nearly parallel (the normal is undefined) are left out; ``near`` pairs (ends
     in each other's 1-ring) keep a smaller distance, as in :func:`_detect`.
     """
-    for k in range(len(pairs)):
+    for k in prange(len(pairs)):
+        slot = offset + k
+        hit[slot] = False
         a0, a1, b0, b1 = pairs[k, 0], pairs[k, 1], pairs[k, 2], pairs[k, 3]
-        da = x[a1] - x[a0]
-        db = x[b1] - x[b0]
-        r = x[a0] - x[b0]
-        aa, bb, ab = da @ da, db @ db, da @ db
+        da, db, r = _d(x, a1, a0), _d(x, b1, b0), _d(x, a0, b0)
+        aa, bb, ab = _dot(da, da), _dot(db, db), _dot(da, db)
         den = aa * bb - ab * ab
         if den <= 1e-6 * aa * bb:  # within 0.06° of parallel
             continue
-        ar, br = da @ r, db @ r
+        ar, br = _dot(da, r), _dot(db, r)
         s = (ab * br - bb * ar) / den
         t = (aa * br - ab * ar) / den
         if s <= 0.0 or s >= 1.0 or t <= 0.0 or t >= 1.0:
             continue
-        n = np.cross(da, db)
-        n = n / math.sqrt(n @ n)
-        pa_pb = r + s * da - t * db
-        g_now = pa_pb @ n
-        n_prev = np.cross(xp[a1] - xp[a0], xp[b1] - xp[b0])
-        g_prev = ((1.0 - s) * xp[a0] + s * xp[a1] - (1.0 - t) * xp[b0] - t * xp[b1]) @ n_prev
-        if n_prev @ n < 0.0:
+        n = _cross(da, db)
+        nn = math.sqrt(_dot(n, n))
+        n = (n[0] / nn, n[1] / nn, n[2] / nn)
+        g_now = 0.0
+        g_prev = 0.0
+        rv_n = 0.0
+        moved2 = 0.0
+        n_prev = _cross(_d(xp, a1, a0), _d(xp, b1, b0))
+        for q in range(3):
+            g_now += (r[q] + s * da[q] - t * db[q]) * n[q]
+            g_prev += ((1.0 - s) * xp[a0, q] + s * xp[a1, q] - (1.0 - t) * xp[b0, q] - t * xp[b1, q]) * n_prev[q]
+            rv_n += ((1.0 - s) * vel[a0, q] + s * vel[a1, q] - (1.0 - t) * vel[b0, q] - t * vel[b1, q]) * n[q]
+            m = ((1.0 - s) * (x[a0, q] - xp[a0, q]) + s * (x[a1, q] - xp[a1, q])
+                 - (1.0 - t) * (x[b0, q] - xp[b0, q]) - t * (x[b1, q] - xp[b1, q]))
+            moved2 += m * m
+        if _dot(n_prev, n) < 0.0:
             g_prev = -g_prev  # the edges turned over each other: keep the sign in today's normal
         side = (1.0 if g_prev > 0.0 else -1.0) if g_prev != 0.0 else (1.0 if g_now >= 0.0 else -1.0)
-        rv = (1.0 - s) * vel[a0] + s * vel[a1] - (1.0 - t) * vel[b0] - t * vel[b1]
-        moved = ((1.0 - s) * (x[a0] - xp[a0]) + s * (x[a1] - xp[a1])
-                 - (1.0 - t) * (x[b0] - xp[b0]) - t * (x[b1] - xp[b1]))
         h = NEAR_THICKNESS * thickness if near[k] else thickness
-        if _classify(side * g_now, -1.5 * dt * side * (rv @ n), math.sqrt(moved @ moved), h, reach):
-            _store(count, out_i, out_a, out_n, out_h, a0, a1, b0, b1, 1.0 - s, s, t - 1.0, -t, side * n, h)
-            count += 1
-    return count
+        if _classify(side * g_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
+            _store(slot, out_i, out_a, out_n, out_h, a0, a1, b0, b1, 1.0 - s, s, t - 1.0, -t,
+                   (side * n[0], side * n[1], side * n[2]), h)
+            hit[slot] = True
+
+
+@njit(cache=True)
+def _segments_within(x, pairs, limit):
+    """Whether the two segments of each pair (E, 4) come within ``limit`` of each other."""
+    out = np.zeros(len(pairs), np.bool_)
+    for k in range(len(pairs)):
+        p0, p1, q0, q1 = x[pairs[k, 0]], x[pairs[k, 1]], x[pairs[k, 2]], x[pairs[k, 3]]
+        d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+        a, e, f = d1 @ d1, d2 @ d2, d2 @ r
+        c, b = d1 @ r, d1 @ d2
+        den = a * e - b * b
+        s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 1e-30 else 0.0
+        t = (b * s + f) / e if e > 1e-30 else 0.0
+        if t < 0.0:
+            t, s = 0.0, (min(max(-c / a, 0.0), 1.0) if a > 1e-30 else 0.0)
+        elif t > 1.0:
+            t, s = 1.0, (min(max((b - c) / a, 0.0), 1.0) if a > 1e-30 else 0.0)
+        g = r + s * d1 - t * d2
+        out[k] = g @ g <= limit * limit
+    return out
 
 
 @njit(cache=True)
@@ -301,10 +352,10 @@ class SelfCollider:
         self._ee = np.zeros((0, 4), np.int64)
         self._anchor = None  # positions relative to the centroid at the last query
         self._reach = self.margin  # candidates hold every pair nearer than thickness + reach at the query
-        self._ptr = np.zeros(self.n + 1, np.int64)
+        self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
         self._x_prev = None
-        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_substeps": 1,
+        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1,
                       "query_s": 0.0, "response_s": 0.0}
 
     # -- regions ---------------------------------------------------------------------------------
@@ -388,9 +439,9 @@ class SelfCollider:
         displacement ``step``: the candidates were valid until that step, so a pair that crossed
         during it lies no deeper than that and is found again (the side memory pushes it back)."""
         t0 = time.perf_counter()
-        self._reach = self.margin + (3.0 * step if math.isfinite(step) else 0.0)
+        self._reach = self.margin + (2.0 * step if math.isfinite(step) else 0.0)
         faces = self.active_faces(x)
-        self._ptr = np.zeros(self.n + 1, np.int64)
+        self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
         self._ee = np.zeros((0, 4), np.int64)
         self._tri_near = np.zeros(0, bool)
@@ -408,15 +459,16 @@ class SelfCollider:
             order = np.lexsort((tri, vertex))
             vertex, tri = vertex[order], tri[order]
             self._tri_near = self._is_ring(vertex[:, None], self.faces[tri]).any(axis=1)
-            self._ptr = np.concatenate([[0], np.cumsum(np.bincount(vertex, minlength=self.n))]).astype(np.int64)
+            self._vtx = np.ascontiguousarray(vertex, dtype=np.int64)
             self._tri = tri
-            self._ee, self._ee_near = self._edge_pairs(vertex, tri)
+            self._ee, self._ee_near = self._edge_pairs(x, vertex, tri)
+            self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
             self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self._anchor = x.copy()
         self.stats["queries"] += 1
         self.stats["query_s"] += time.perf_counter() - t0
 
-    def _edge_pairs(self, vertex, tri):
+    def _edge_pairs(self, x, vertex, tri):
         """Edge–edge candidates (E, 4): every edge at a candidate vertex against the candidate triangle's
         edges, without pairs sharing an end; and whether their ends are 1-ring neighbours."""
         deg = np.diff(self._ve_ptr)[vertex]
@@ -431,6 +483,10 @@ class SelfCollider:
         ea, eb = self._edges[key // ne], self._edges[key % ne]
         shared = (ea[:, :, None] == eb[:, None, :]).any(axis=(1, 2))
         ea, eb = ea[~shared], eb[~shared]
+        # only edges that come within the query radius: the candidates' other edge pairs are far apart
+        pairs = np.ascontiguousarray(np.column_stack([ea, eb]), dtype=np.int64)
+        close = _segments_within(x, pairs, self.thickness + self._reach)
+        ea, eb = ea[close], eb[close]
         near = self._is_ring(ea[:, :, None], eb[:, None, :]).any(axis=(1, 2))
         return np.ascontiguousarray(np.column_stack([ea, eb]), dtype=np.int64), near
 
@@ -490,23 +546,26 @@ class SelfCollider:
         """Detect and resolve contacts at ``x`` (side memory ``xp``) until nothing new; returns the contact keys."""
         m = len(self._tri) + len(self._ee)
         ci, ca, cn, ch = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 3)), np.empty(m)
+        hit = np.zeros(m if self.edges else len(self._tri), np.bool_)
         weight = np.array([self.n ** 3, self.n ** 2, self.n, 1], np.int64)
         lists = []
         seen = np.zeros(0, np.int64)
         for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
-            k_vt = _detect(x, xp, v, dt, self.faces, self._ptr, self._tri, self._tri_near, self.thickness,
-                           self.thickness + self._reach, ci, ca, cn, ch)
-            k = k_vt
+            _detect(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self.thickness,
+                    self.thickness + self._reach, ci, ca, cn, ch, hit)
             if self.edges:
-                k = _detect_edges(x, xp, v, dt, self._ee, self._ee_near, self.thickness, self.thickness + self._reach,
-                                  ci, ca, cn, ch, k_vt)
-            key = np.sort(ci[:k], axis=1) @ weight
-            key[k_vt:] = -1 - key[k_vt:]  # edge pairs apart from vertex–triangle pairs of the same four vertices
+                _detect_edges(x, xp, v, dt, self._ee, self._ee_near, self.thickness, self.thickness + self._reach,
+                              ci, ca, cn, ch, hit, len(self._tri))
+            found = np.flatnonzero(hit)
+            key = np.sort(ci[found], axis=1) @ weight
+            edge = found >= len(self._tri)
+            key[edge] = -1 - key[edge]  # edge pairs apart from vertex–triangle pairs of the same four vertices
             new = np.flatnonzero(~np.isin(key, seen))
             if not len(new):
                 break
             seen = np.concatenate([seen, key[new]])
-            lists.append((ci[new].copy(), ca[new].copy(), cn[new].copy(), ch[new].copy()))
+            new = found[new]
+            lists.append((ci[new], ca[new], cn[new], ch[new]))
             all_i, all_a, all_n, all_h = (np.concatenate(c) for c in zip(*lists))
             _resolve(x, v, im, all_i, all_a, all_n, all_h, dt, self.friction, sweeps)
         return np.union1d(keys, seen)
