@@ -72,6 +72,8 @@ NEAR_THICKNESS = 0.25
 """Fraction of the thickness kept between a vertex and a triangle of its 1-ring (or two edges whose
 ends are neighbours): enough to stop a tight fold passing through itself, little enough not to
 push a sharp seam corner open."""
+PARALLEL_PAIRS = 4096
+"""Candidate pairs from which the narrow phase runs on every thread (below, waking them costs more)."""
 MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 
@@ -118,12 +120,10 @@ def _store(k, out_i, out_a, out_n, out_h, i0, i1, i2, i3, a0, a1, a2, a3, n, h):
     out_h[k] = h
 
 
-@njit(cache=True, parallel=True)
-def _detect(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
-    """Vertex–triangle contacts among the candidates (vertex ``vtx[k]``, triangle ``tri[k]``).
-
-    Candidate k, if a contact, fills slot k of the outputs and sets ``hit[k]`` (one slot each, so
-    the result does not depend on the thread count). Each contact is a stencil of four vertices
+@njit(cache=True, inline="always")
+def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
+    """Whether candidate k (vertex ``vtx[k]``, triangle ``tri[k]``) is a contact; if so it fills
+    slot k of the outputs and sets ``hit[k]``. Each contact is a stencil of four vertices
     with signed weights α summing to zero, the gap being (Σαᵢxᵢ)·n with ``n`` pointing to the side
     the vertex was on before this step (side memory): vertex p over triangle abc at barycentrics
     (u, v, w) has α = (1, −u, −v, −w). Contacts are in contact, predicted or crossed
@@ -132,46 +132,60 @@ def _detect(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_
     are close without touching, but a tight fold can still pass through. Each contact's kept
     distance goes to ``out_h``.
     """
-    for k in prange(len(tri)):
-        hit[k] = False
-        p, t = vtx[k], tri[k]
-        a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
-        e1, e2 = _d(x, b, a), _d(x, c, a)
-        n = _cross(e1, e2)
-        nn = math.sqrt(_dot(n, n))
-        if nn <= 1e-300:
-            continue
-        n = (n[0] / nn, n[1] / nn, n[2] / nn)
-        d = _d(x, p, a)
-        s_prev = _dot(_d(xp, p, a), _cross(_d(xp, b, a), _d(xp, c, a)))
-        s_now = _dot(d, n)
-        side = (1.0 if s_prev > 0.0 else -1.0) if s_prev != 0.0 else (1.0 if s_now >= 0.0 else -1.0)
-        d11, d12, d22 = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
-        den = d11 * d22 - d12 * d12
-        if den <= 0.0:
-            continue
-        r1, r2 = _dot(d, e1), _dot(d, e2)
-        v = (d22 * r1 - d12 * r2) / den
-        w = (d11 * r2 - d12 * r1) / den
-        u = 1.0 - v - w
-        if u < 0.0 or v < 0.0 or w < 0.0:
-            continue
-        rv_n = 0.0
-        moved2 = 0.0
-        for q in range(3):
-            rv_n += (vel[p, q] - (u * vel[a, q] + v * vel[b, q] + w * vel[c, q])) * n[q]
-            m = (x[p, q] - xp[p, q]) - (u * (x[a, q] - xp[a, q]) + v * (x[b, q] - xp[b, q]) + w * (x[c, q] - xp[c, q]))
-            moved2 += m * m
-        h = NEAR_THICKNESS * thickness if near[k] else thickness
-        if _classify(side * s_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
-            _store(k, out_i, out_a, out_n, out_h, p, a, b, c, 1.0, -u, -v, -w,
-                   (side * n[0], side * n[1], side * n[2]), h)
-            hit[k] = True
+    hit[k] = False
+    p, t = vtx[k], tri[k]
+    a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
+    e1, e2 = _d(x, b, a), _d(x, c, a)
+    n = _cross(e1, e2)
+    nn = math.sqrt(_dot(n, n))
+    if nn <= 1e-300:
+        return
+    n = (n[0] / nn, n[1] / nn, n[2] / nn)
+    d = _d(x, p, a)
+    s_prev = _dot(_d(xp, p, a), _cross(_d(xp, b, a), _d(xp, c, a)))
+    s_now = _dot(d, n)
+    side = (1.0 if s_prev > 0.0 else -1.0) if s_prev != 0.0 else (1.0 if s_now >= 0.0 else -1.0)
+    d11, d12, d22 = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
+    den = d11 * d22 - d12 * d12
+    if den <= 0.0:
+        return
+    r1, r2 = _dot(d, e1), _dot(d, e2)
+    v = (d22 * r1 - d12 * r2) / den
+    w = (d11 * r2 - d12 * r1) / den
+    u = 1.0 - v - w
+    if u < 0.0 or v < 0.0 or w < 0.0:
+        return
+    rv_n = 0.0
+    moved2 = 0.0
+    for q in range(3):
+        rv_n += (vel[p, q] - (u * vel[a, q] + v * vel[b, q] + w * vel[c, q])) * n[q]
+        m = (x[p, q] - xp[p, q]) - (u * (x[a, q] - xp[a, q]) + v * (x[b, q] - xp[b, q]) + w * (x[c, q] - xp[c, q]))
+        moved2 += m * m
+    h = NEAR_THICKNESS * thickness if near[k] else thickness
+    if _classify(side * s_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
+        _store(k, out_i, out_a, out_n, out_h, p, a, b, c, 1.0, -u, -v, -w,
+               (side * n[0], side * n[1], side * n[2]), h)
+        hit[k] = True
 
 
 @njit(cache=True, parallel=True)
-def _detect_edges(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
-    """Edge–edge contacts among the candidate ``pairs`` (E, 4) = (a0, a1, b0, b1); pair k uses slot
+def _detect(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
+    """Every vertex–triangle candidate through :func:`_vt_pair`, in parallel (one slot each: the result
+    does not depend on the thread count)."""
+    for k in prange(len(tri)):
+        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit)
+
+
+@njit(cache=True)
+def _detect_serial(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
+    """:func:`_detect` on one thread: a few hundred candidates are not worth waking the others."""
+    for k in range(len(tri)):
+        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit)
+
+
+@njit(cache=True, inline="always")
+def _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+    """Whether candidate edge pair k of ``pairs`` (E, 4) = (a0, a1, b0, b1) is a contact; it uses slot
     ``offset + k`` of the outputs and of ``hit``.
 
     Two edges can pass through each other with no vertex ever near a triangle (sheets sliding
@@ -183,43 +197,56 @@ def _detect_edges(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, o
     it) or that are nearly parallel (the normal is undefined) are left out; ``near`` pairs (ends
     in each other's 1-ring) keep a smaller distance, as in :func:`_detect`.
     """
+    slot = offset + k
+    hit[slot] = False
+    a0, a1, b0, b1 = pairs[k, 0], pairs[k, 1], pairs[k, 2], pairs[k, 3]
+    da, db, r = _d(x, a1, a0), _d(x, b1, b0), _d(x, a0, b0)
+    aa, bb, ab = _dot(da, da), _dot(db, db), _dot(da, db)
+    den = aa * bb - ab * ab
+    if den <= 1e-6 * aa * bb:  # within 0.06° of parallel
+        return
+    ar, br = _dot(da, r), _dot(db, r)
+    s = (ab * br - bb * ar) / den
+    t = (aa * br - ab * ar) / den
+    if s <= 0.0 or s >= 1.0 or t <= 0.0 or t >= 1.0:
+        return
+    n = _cross(da, db)
+    nn = math.sqrt(_dot(n, n))
+    n = (n[0] / nn, n[1] / nn, n[2] / nn)
+    g_now = 0.0
+    g_prev = 0.0
+    rv_n = 0.0
+    moved2 = 0.0
+    n_prev = _cross(_d(xp, a1, a0), _d(xp, b1, b0))
+    for q in range(3):
+        g_now += (r[q] + s * da[q] - t * db[q]) * n[q]
+        g_prev += ((1.0 - s) * xp[a0, q] + s * xp[a1, q] - (1.0 - t) * xp[b0, q] - t * xp[b1, q]) * n_prev[q]
+        rv_n += ((1.0 - s) * vel[a0, q] + s * vel[a1, q] - (1.0 - t) * vel[b0, q] - t * vel[b1, q]) * n[q]
+        m = ((1.0 - s) * (x[a0, q] - xp[a0, q]) + s * (x[a1, q] - xp[a1, q])
+             - (1.0 - t) * (x[b0, q] - xp[b0, q]) - t * (x[b1, q] - xp[b1, q]))
+        moved2 += m * m
+    if _dot(n_prev, n) < 0.0:
+        g_prev = -g_prev  # the edges turned over each other: keep the sign in today's normal
+    side = (1.0 if g_prev > 0.0 else -1.0) if g_prev != 0.0 else (1.0 if g_now >= 0.0 else -1.0)
+    h = NEAR_THICKNESS * thickness if near[k] else thickness
+    if _classify(side * g_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
+        _store(slot, out_i, out_a, out_n, out_h, a0, a1, b0, b1, 1.0 - s, s, t - 1.0, -t,
+               (side * n[0], side * n[1], side * n[2]), h)
+        hit[slot] = True
+
+
+@njit(cache=True, parallel=True)
+def _detect_edges(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+    """Every edge–edge candidate through :func:`_ee_pair`, in parallel (one slot each)."""
     for k in prange(len(pairs)):
-        slot = offset + k
-        hit[slot] = False
-        a0, a1, b0, b1 = pairs[k, 0], pairs[k, 1], pairs[k, 2], pairs[k, 3]
-        da, db, r = _d(x, a1, a0), _d(x, b1, b0), _d(x, a0, b0)
-        aa, bb, ab = _dot(da, da), _dot(db, db), _dot(da, db)
-        den = aa * bb - ab * ab
-        if den <= 1e-6 * aa * bb:  # within 0.06° of parallel
-            continue
-        ar, br = _dot(da, r), _dot(db, r)
-        s = (ab * br - bb * ar) / den
-        t = (aa * br - ab * ar) / den
-        if s <= 0.0 or s >= 1.0 or t <= 0.0 or t >= 1.0:
-            continue
-        n = _cross(da, db)
-        nn = math.sqrt(_dot(n, n))
-        n = (n[0] / nn, n[1] / nn, n[2] / nn)
-        g_now = 0.0
-        g_prev = 0.0
-        rv_n = 0.0
-        moved2 = 0.0
-        n_prev = _cross(_d(xp, a1, a0), _d(xp, b1, b0))
-        for q in range(3):
-            g_now += (r[q] + s * da[q] - t * db[q]) * n[q]
-            g_prev += ((1.0 - s) * xp[a0, q] + s * xp[a1, q] - (1.0 - t) * xp[b0, q] - t * xp[b1, q]) * n_prev[q]
-            rv_n += ((1.0 - s) * vel[a0, q] + s * vel[a1, q] - (1.0 - t) * vel[b0, q] - t * vel[b1, q]) * n[q]
-            m = ((1.0 - s) * (x[a0, q] - xp[a0, q]) + s * (x[a1, q] - xp[a1, q])
-                 - (1.0 - t) * (x[b0, q] - xp[b0, q]) - t * (x[b1, q] - xp[b1, q]))
-            moved2 += m * m
-        if _dot(n_prev, n) < 0.0:
-            g_prev = -g_prev  # the edges turned over each other: keep the sign in today's normal
-        side = (1.0 if g_prev > 0.0 else -1.0) if g_prev != 0.0 else (1.0 if g_now >= 0.0 else -1.0)
-        h = NEAR_THICKNESS * thickness if near[k] else thickness
-        if _classify(side * g_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
-            _store(slot, out_i, out_a, out_n, out_h, a0, a1, b0, b1, 1.0 - s, s, t - 1.0, -t,
-                   (side * n[0], side * n[1], side * n[2]), h)
-            hit[slot] = True
+        _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
+
+
+@njit(cache=True)
+def _detect_edges_serial(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+    """:func:`_detect_edges` on one thread."""
+    for k in range(len(pairs)):
+        _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
 
 
 @njit(cache=True)
@@ -551,11 +578,12 @@ class SelfCollider:
         lists = []
         seen = np.zeros(0, np.int64)
         for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
-            _detect(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self.thickness,
-                    self.thickness + self._reach, ci, ca, cn, ch, hit)
+            vt, ee = (_detect, _detect_edges) if m >= PARALLEL_PAIRS else (_detect_serial, _detect_edges_serial)
+            vt(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self.thickness,
+               self.thickness + self._reach, ci, ca, cn, ch, hit)
             if self.edges:
-                _detect_edges(x, xp, v, dt, self._ee, self._ee_near, self.thickness, self.thickness + self._reach,
-                              ci, ca, cn, ch, hit, len(self._tri))
+                ee(x, xp, v, dt, self._ee, self._ee_near, self.thickness, self.thickness + self._reach,
+                   ci, ca, cn, ch, hit, len(self._tri))
             found = np.flatnonzero(hit)
             key = np.sort(ci[found], axis=1) @ weight
             edge = found >= len(self._tri)
