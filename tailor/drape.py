@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .collide import SELF_COLLISION_MODES, BodyCollider, SelfCollider, points_inside
+from .collide import SELF_COLLISION_MODES, BodyCollider, SelfCollider, points_inside, self_intersections
 from .errors import SimulationError
 from .fabric import Fabric, preset
 from .forces import total_forces
@@ -446,7 +446,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     # 4. motion, one frame every 1/fps
     t0 = time.perf_counter()
     sim["motion_start"] = state.t
-    penetration = []
+    penetration, crossings = [], []
     for f in range(frames):
         if f:
             state = advance(state, frame_dt)
@@ -454,12 +454,14 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         dist, tri, _, _ = collider.nearest(state.x, bx, k)
         inside = dist[tri >= 0]
         penetration.append(float(max(0.0, -inside.min())) if len(inside) else 0.0)
+        crossings.append(len(self_intersections(state.x, sim["model"].faces)))  # the cloth through itself
         emit(state, bx)
         tell("motion", f + 1, frames, state)
     report["phases"]["motion"] = {"simulated_s": (frames - 1) / fps, "frames": frames, "wall_s": time.perf_counter() - t0,
                                   "time_step_s": motion_dt, "time_step_still_s": still_dt, "body_max_speed_m_s": body_speed}
     report["max_penetration_m_per_frame"] = penetration
     report["max_penetration_m"] = max(penetration) if penetration else 0.0
+    report["self_intersections_per_frame"] = crossings  # intersecting triangle pairs (none sharing a vertex)
     report["wall_s"] = time.perf_counter() - t_start
     report["steps"] = sim["steps"]
     report["body_bvh_queries"] = collider.queries

@@ -94,6 +94,8 @@ def test_skirt_sews_into_one_piece_without_penetration(skirt_static, tmp_path):
     assert len(vertices) == result.report["welded_vertices"] < result.report["vertices"]
     report = json.loads((out / "report.json").read_text())
     assert report["max_penetration_m"] <= 0.002
+    # the written frames do not pass through themselves, and the report counts it frame by frame
+    assert report["self_intersections_per_frame"] == [0, 0, 0] == [len(self_intersections(vertices, faces))] * 3
     assert report["phases"]["sewing"]["max_gap_at_merge_m"] <= 0.3 * 0.04 + 1e-9
     # every seam pair is one vertex now: gap exactly 0
     x = result.frames[-1]
