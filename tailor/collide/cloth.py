@@ -47,7 +47,8 @@ sub-steps it tangled into 21 k intersecting triangle pairs, more than the 1.3 k 
 Measured (two 40 cm cotton panels dropped 2 cm apart on a sphere, 0.4 s at Δt 0.01 s; an 80 cm jersey
 strip dropped on end): intersecting triangle pairs in the last frame 20 → **0 in every frame** with
 the edge–edge pairs and the near pairs (the strip: 8–46 a frame without the near pairs); the sphere
-scene costs 56 s instead of 38 s.
+scene runs in 17 s (38 s with vertex–triangle pairs only, before the narrow phase was compiled
+allocation-free and parallel).
 """
 
 from __future__ import annotations
