@@ -27,7 +27,7 @@ __all__ = ["Measurements", "MEASUREMENT_PRESETS", "Mannequin", "make_mannequin",
 
 @dataclass(frozen=True, slots=True)
 class Measurements:
-    """Tape measurements of a body [m] and the arms' pose angle [rad].
+    """Tape measurements of a body [m], the arms' pose angle and the shoulders' slope [rad].
 
     Heights are derived from lengths the way GarmentCode's body parameters are: the shoulder
     line sits ``head`` below the top of the head at the neck and falls ``shoulder_slope``
