@@ -73,3 +73,17 @@ def test_other_measurements_make_another_body():
     assert marks["waist"].girth == pytest.approx(MEASUREMENT_PRESETS["man"].waist, abs=0.02)
     assert np.ptp(man.vertices[:, 2]) == pytest.approx(1.78, abs=0.02)
     assert walk_cycle(man, frames=5).shape == (5, len(man.vertices), 3)
+
+
+def test_shoulders_fall_from_the_neck_at_the_shoulder_slope(mannequin):
+    """The top of the trunk falls tan(slope) per metre outwards from the neck (a flat 'coat-hanger'
+    top held GarmentCode's T-shirt 4 cm too low and it slid off)."""
+    v = mannequin.vertices
+
+    def top(x):
+        near = (np.abs(v[:, 0] - x) < 0.008) & (np.abs(v[:, 1]) < 0.03) & (v[:, 2] > 1.3) & (v[:, 2] < 1.52)
+        return v[near, 2].max()
+
+    inner, outer = 0.5 * DEFAULT.neck_width + 0.01, 0.5 * DEFAULT.shoulder_width - 0.02
+    fall = top(inner) - top(outer)
+    assert fall == pytest.approx(np.tan(DEFAULT.shoulder_slope) * (outer - inner), abs=0.005)  # flat top: 6 mm
