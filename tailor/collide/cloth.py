@@ -489,7 +489,8 @@ class SelfCollider:
             self._tri_near = self._is_ring(vertex[:, None], self.faces[tri]).any(axis=1)
             self._vtx = np.ascontiguousarray(vertex, dtype=np.int64)
             self._tri = tri
-            self._ee, self._ee_near = self._edge_pairs(x, vertex, tri)
+            if self.edges:
+                self._ee, self._ee_near = self._edge_pairs(x, vertex, tri)
             self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
             self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self._anchor = x.copy()
@@ -574,7 +575,7 @@ class SelfCollider:
         """Detect and resolve contacts at ``x`` (side memory ``xp``) until nothing new; returns the contact keys."""
         m = len(self._tri) + len(self._ee)
         ci, ca, cn, ch = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 3)), np.empty(m)
-        hit = np.zeros(m if self.edges else len(self._tri), np.bool_)
+        hit = np.zeros(m, np.bool_)
         weight = np.array([self.n ** 3, self.n ** 2, self.n, 1], np.int64)
         lists = []
         seen = np.zeros(0, np.int64)
