@@ -87,14 +87,18 @@ class Guard:
     strain_every: int = 50
 
 
-def max_stretch(model, x) -> float:
-    """Largest principal stretch of any triangle (1 = rest)."""
+def face_stretch(model, x) -> np.ndarray:
+    """Largest principal stretch of each triangle (1 = rest), shape (F,)."""
     f = deformation_gradient(model, x)
     c = np.einsum("fki,fkj->fij", f, f)  # right Cauchy–Green, (F, 2, 2)
     tr = c[:, 0, 0] + c[:, 1, 1]
     det = c[:, 0, 0] * c[:, 1, 1] - c[:, 0, 1] ** 2
-    lam = 0.5 * tr + np.sqrt(np.maximum(0.25 * tr * tr - det, 0.0))
-    return float(np.sqrt(lam.max(initial=1.0)))
+    return np.sqrt(0.5 * tr + np.sqrt(np.maximum(0.25 * tr * tr - det, 0.0)))
+
+
+def max_stretch(model, x) -> float:
+    """Largest principal stretch of any triangle (1 = rest)."""
+    return float(face_stretch(model, x).max(initial=1.0))
 
 
 def _remedy(integrator: str, dt: float) -> str:
@@ -117,11 +121,13 @@ def check_state(model, state, *, step: int, dt: float, integrator: str = "?", fr
             f"simulation unstable at {where}: a vertex moves at {speed:.3g} m/s (limit {guard.max_speed:g}); {_remedy(integrator, dt)}"
         )
     if strain and model.face_count:
-        s = max_stretch(model, state.x)
+        stretch = face_stretch(model, state.x)
+        s = float(stretch.max(initial=1.0))
         if s > guard.max_stretch:
+            at = np.asarray(state.x)[np.asarray(model.faces)[int(np.argmax(stretch))]].mean(axis=0)
             raise SimulationUnstable(
-                f"simulation unstable at {where}: a triangle is stretched {s:.3g}× its rest size "
-                f"(limit {guard.max_stretch:g}×); {_remedy(integrator, dt)}"
+                f"simulation unstable at {where}: a triangle at ({at[0]:.3f}, {at[1]:.3f}, {at[2]:.3f}) m is stretched "
+                f"{s:.3g}× its rest size (limit {guard.max_stretch:g}×); {_remedy(integrator, dt)}"
             )
 
 
