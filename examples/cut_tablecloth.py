@@ -3,8 +3,9 @@
 Run:  python examples/cut_tablecloth.py    (writes out/cut_tablecloth/frame_0000.obj …, cut.png)
 
 The brush (tailor.tearing.Cut) removes the cloth within a radius of a point (a round hole in
-the middle of the table) or of a polyline (a slit up one overhanging side); the mesh gets new
-boundary loops there and the freed flaps fall. The table is a box the cloth collides with
+the middle of the table) or of a polyline (a slit down the front overhang), or cuts it apart
+along a polyline without removing any (``separate=True``: scissors up the left overhang); the
+mesh gets new boundary loops there and the freed flaps fall. The table is a box the cloth collides with
 (Carignan Eq. 9–14, friction 0.4).
 """
 
@@ -32,6 +33,8 @@ table.apply_translation((0.0, 0.0, 0.375))
 cuts = [
     Cut(1.0, [(0.0, 0.0, 0.75)], 0.15),  # a hole in the middle of the top
     Cut(1.2, [(0.2, -0.4, 0.75), (0.2, -0.41, 0.5), (0.2, -0.42, 0.3)], 0.03),  # a slit down the front overhang
+    # scissors up the left overhang: nothing removed, the cloth parted along the line
+    Cut(1.3, [(-0.42, 0.1, 0.2), (-0.41, 0.1, 0.5), (-0.4, 0.1, 0.72)], 0.08, separate=True),
 ]
 cloth = TearableCloth(mesh, lambda m, pinned: build_model(m, fabric, air_density=AIR_DENSITY, pinned=pinned),
                       tear_strain=0.0)

@@ -14,7 +14,9 @@ breaks (and those within 2 % of it): the crack localises at the weakest point an
 following steps, as stress concentrates at its tip (Walker's chain reaction).
 
 A **cut** (the brush) removes the triangles whose centroid lies within ``radius`` of a point or
-of a polyline at a given time; the vertices left without triangles go with them.
+of a polyline at a given time; the vertices left without triangles go with them. A *separating*
+cut loses no cloth: the edges between the triangles on the two sides of its polyline break, and
+the mesh splits along them exactly as a tear does (mass and momentum exact).
 """
 
 from __future__ import annotations
@@ -43,11 +45,15 @@ class Cut:
     """A scripted cut: at ``time`` [s] remove the cloth within ``radius`` [m] of ``points``.
 
     ``points`` is one point (a round hole) or a polyline (a slit as wide as 2·radius), shape (k, 3) [m].
+    With ``separate`` the polyline instead cuts the cloth apart without removing any: the mesh edges
+    between the triangles on its two sides (within ``radius`` of it, which should exceed the mesh's
+    edge length) break, as scissors would cut.
     """
 
     time: float
     points: tuple
     radius: float
+    separate: bool = False
 
     def __post_init__(self):
         pts = np.asarray(self.points, dtype=float).reshape(-1, 3)
@@ -55,7 +61,28 @@ class Cut:
             raise ValueError("a cut needs at least one finite point (x, y, z)")
         if not self.radius > 0:
             raise ValueError(f"a cut's radius must be positive, got {self.radius!r}")
+        if self.separate and len(pts) < 2:
+            raise ValueError("a separating cut needs a polyline of at least two points")
         object.__setattr__(self, "points", tuple(map(tuple, pts)))
+
+    def sides(self, centroid, normal):
+        """Side of the polyline of each triangle (centroid, unit normal): +1, −1, or 0 if farther than
+        ``radius`` or beyond its ends. The side is that of ``(c − p) · (t × n)`` with p the nearest
+        point of the polyline and t its direction there."""
+        pts = np.asarray(self.points)
+        a, b = pts[:-1], pts[1:]
+        ab = b - a
+        length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        s = np.einsum("fsj,sj->fs", centroid[:, None, :] - a[None], ab) / length2  # (F, S)
+        inner = np.clip(s, 0.0, 1.0)
+        near = a[None] + inner[..., None] * ab[None]
+        dist = np.linalg.norm(centroid[:, None, :] - near, axis=2)
+        k = np.argmin(dist, axis=1)
+        rows = np.arange(len(centroid))
+        beyond = ((k == 0) & (s[rows, k] < 0.0)) | ((k == len(ab) - 1) & (s[rows, k] > 1.0))
+        side = np.sign(np.einsum("ij,ij->i", centroid - near[rows, k], np.cross(ab[k], normal)))
+        side[(dist[rows, k] > self.radius) | beyond] = 0.0
+        return side.astype(np.int64)
 
     def samples(self) -> np.ndarray:
         """Points along the polyline no farther apart than half the radius, shape (m, 3)."""
@@ -133,24 +160,32 @@ class TearableCloth:
     Parameters
     ----------
     mesh : GarmentMesh
-    build : callable ``build(mesh, pinned_mask) -> Model``
-        Builds the model of a (changed) mesh: the fabric, elastic model, air etc. live here.
+    build : callable
+        Builds the model of a (changed) mesh: ``build(mesh, pinned_mask)``, or with ``weld``
+        ``build(mesh, pinned_mask, weld)``; the fabric, elastic model, air etc. live here.
     tear_strain : float
         Stretch across an edge beyond which it breaks (0.25 = 25 %); 0 = never tears.
     pinned : bool mask or indices, optional
+        Of the simulated (welded) vertices.
+    weld : (N,) int, optional
+        A sewn garment: the simulated vertex of each mesh vertex (seam vertices share one). The
+        cloth's state, pins and ``origin`` are then per welded vertex; a crack may run through a
+        panel or along a seam (unpicking it), and splits the welded vertices it passes.
     """
 
-    def __init__(self, mesh, build, *, tear_strain: float, pinned=None):
+    def __init__(self, mesh, build, *, tear_strain: float, pinned=None, weld=None):
         if tear_strain < 0:
             raise ValueError(f"tear_strain must be >= 0, got {tear_strain!r}")
         self.mesh, self.build, self.tear_strain = mesh, build, float(tear_strain)
-        n = mesh.vertex_count
+        self.welded = weld is not None
+        self.weld = np.arange(mesh.vertex_count) if weld is None else np.asarray(weld, np.intp).copy()
+        n = int(self.weld.max()) + 1 if len(self.weld) else 0
         mask = np.zeros(n, bool)
         if pinned is not None:
             pinned = np.asarray(pinned)
             mask[pinned if pinned.dtype != bool else np.flatnonzero(pinned)] = True
         self.pinned = mask
-        self.origin = np.arange(n)  # mesh vertex → vertex of the original mesh
+        self.origin = np.arange(n)  # simulated vertex → vertex it was copied from, at the start
         self.broken = np.zeros((mesh.face_count, 3), bool)  # (face, local edge k: f[k]→f[k+1])
         uv = mesh.uv[mesh.faces]
         dm = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], axis=2)  # (F, 2, 2)
@@ -160,18 +195,26 @@ class TearableCloth:
         self._normal = nrm / np.linalg.norm(nrm, axis=-1, keepdims=True)  # (F, 3, 2) rest normal of each edge
         self.tears = 0
         self.events: list = []
-        self.model = build(mesh, self.pinned)
+        self.model = self._build()
         self._refresh()
 
+    def _build(self):
+        return self.build(self.mesh, self.pinned, self.weld) if self.welded else self.build(self.mesh, self.pinned)
+
+    @property
+    def faces(self) -> np.ndarray:
+        """Triangles in simulated (welded) vertex indices."""
+        return self.weld[self.mesh.faces]
+
     def _refresh(self):
-        self._edges, self._face_edge = _edge_table(self.mesh.faces)
+        self._edges, self._face_edge = _edge_table(self.faces)
         use = np.bincount(self._face_edge.ravel(), minlength=len(self._edges))
         self._interior = use == 2
 
     # -- tearing ------------------------------------------------------------------------------
     def across_stretch(self, x) -> np.ndarray:
         """Stretch of the cloth across each (face, local edge), shape (F, 3) (1 = rest)."""
-        p = np.asarray(x)[self.mesh.faces]
+        p = np.asarray(x)[self.faces]
         ds = np.stack([p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]], axis=2)  # (F, 3, 2)
         deform = ds @ self._dm_inv  # (F, 3, 2)
         return np.linalg.norm(np.einsum("fij,fkj->fki", deform, self._normal), axis=-1)
@@ -203,24 +246,53 @@ class TearableCloth:
         return self._split(state, np.unique(self._edges[breaking]))
 
     def _split(self, state, vertices):
+        """Give each group of triangles around ``vertices`` (simulated indices) beyond the first its own vertex.
+
+        In a sewn garment a group's corners are mesh vertices welded to the split one: a mesh vertex
+        whose triangles all lie in the group moves to the new simulated vertex (a seam unpicked);
+        one shared with another group is copied (a crack through a panel).
+        """
+        wf = self.faces
         faces = self.mesh.faces.copy()
-        new_origin = []
-        next_id = self.mesh.vertex_count
+        weld = list(self.weld)
+        mesh_src = list(range(self.mesh.vertex_count))
+        w_src = []
+        next_w = len(self.pinned)
         for v in vertices:
-            for members in _fan_groups(faces, self.broken, v)[1:]:
+            groups = _fan_groups(wf, self.broken, v)
+            if len(groups) < 2:
+                continue
+            owner = {}  # mesh vertex at v → groups of its triangles there
+            for gi, members in enumerate(groups):
                 for f in members:
-                    faces[f][faces[f] == v] = next_id
-                new_origin.append(v)
-                next_id += 1
-        if not new_origin:
+                    owner.setdefault(int(self.mesh.faces[f][wf[f] == v][0]), set()).add(gi)
+            for gi, members in enumerate(groups[1:], start=1):
+                copies = {}
+                for f in members:
+                    corner = int(np.flatnonzero(wf[f] == v)[0])
+                    o = int(self.mesh.faces[f, corner])
+                    if owner[o] == {gi}:  # all of this mesh vertex's triangles here: it moves
+                        weld[o] = next_w
+                    else:
+                        if o not in copies:
+                            copies[o] = len(mesh_src)
+                            mesh_src.append(o)
+                            weld.append(next_w)
+                        faces[f, corner] = copies[o]
+                w_src.append(int(v))
+                next_w += 1
+        if not w_src:
             return state
-        src = np.concatenate([np.arange(self.mesh.vertex_count), np.asarray(new_origin, np.intp)])
-        return self._rebuild(state, faces, src)
+        src_w = np.concatenate([np.arange(len(self.pinned)), np.asarray(w_src, np.intp)])
+        return self._rebuild(state, faces, np.asarray(mesh_src, np.intp), np.asarray(weld, np.intp), src_w)
 
     # -- cutting ------------------------------------------------------------------------------
     def cut(self, state, cut: Cut):
-        """Remove the triangles within ``cut.radius`` of its points; returns the new State."""
-        centroid = np.asarray(state.x)[self.mesh.faces].mean(axis=1)
+        """Remove the triangles within ``cut.radius`` of its points (or, for a separating cut, break
+        the edges along its polyline); returns the new State."""
+        if cut.separate:
+            return self._separate(state, cut)
+        centroid = np.asarray(state.x)[self.faces].mean(axis=1)
         pts = cut.samples()
         near = np.zeros(len(centroid), bool)
         for chunk in np.array_split(pts, max(1, len(pts) // 64)):
@@ -229,18 +301,44 @@ class TearableCloth:
             log.info("cut at t = %.3f s touches no cloth", cut.time)
             return state
         keep = ~near
-        faces = self.mesh.faces[keep]
-        used = np.unique(faces)
+        if not keep.any():
+            raise SimulationError(f"the cut at t = {cut.time:g} s removes all of the cloth")
+        used = np.unique(self.mesh.faces[keep])
         remap = np.full(self.mesh.vertex_count, -1, np.intp)
         remap[used] = np.arange(len(used))
+        used_w = np.unique(self.weld[used])
+        remap_w = np.full(len(self.pinned), -1, np.intp)
+        remap_w[used_w] = np.arange(len(used_w))
         self.broken = self.broken[keep]
         self._dm_inv, self._normal = self._dm_inv[keep], self._normal[keep]
         self.events.append((float(state.t), -int(near.sum())))
-        return self._rebuild(state, remap[faces], used, face_keep=keep)
+        return self._rebuild(state, remap[self.mesh.faces[keep]], used, remap_w[self.weld[used]], used_w,
+                             face_keep=keep)
+
+    def _separate(self, state, cut: Cut):
+        p = np.asarray(state.x)[self.faces]
+        normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        side = cut.sides(p.mean(axis=1), normal)
+        # an interior edge between triangles on opposite sides breaks (in both its faces)
+        f_of = np.repeat(np.arange(self.mesh.face_count), 3)
+        e = self._face_edge.ravel()
+        order = np.argsort(e, kind="stable")
+        e_sorted, f_sorted = e[order], f_of[order]
+        twin = np.flatnonzero(e_sorted[1:] == e_sorted[:-1])
+        fa, fb = f_sorted[twin], f_sorted[twin + 1]
+        breaking = np.unique(e_sorted[twin][side[fa] * side[fb] < 0])
+        if not len(breaking):
+            log.info("separating cut at t = %.3f s crosses no cloth", cut.time)
+            return state
+        self.broken |= np.isin(self._face_edge, breaking)
+        self.events.append((float(state.t), int(len(breaking))))
+        return self._split(state, np.unique(self._edges[breaking]))
 
     # -- shared ---------------------------------------------------------------------------------
-    def _rebuild(self, state, faces, src, face_keep=None):
-        """New mesh with vertices ``src`` (indices into the current ones) and ``faces`` in new indices."""
+    def _rebuild(self, state, faces, src, weld, src_w, face_keep=None):
+        """New mesh: mesh vertices ``src`` (indices into the current ones), ``faces`` in new indices,
+        ``weld`` the new simulated vertex of each, whose state is that of the old ``src_w``."""
         m = self.mesh
         fk = slice(None) if face_keep is None else face_keep
         old_to_new = {int(s): i for i, s in enumerate(src)}
@@ -249,12 +347,14 @@ class TearableCloth:
         self.mesh = replace(m, uv=m.uv[src], faces=faces, vertex_panel=m.vertex_panel[src], face_panel=m.face_panel[fk],
                             face_grain=m.face_grain[fk], seam_pairs=np.zeros((0, 2), np.intp),
                             seam_pair_seam=np.zeros(0, np.intp), edge_vertices=edge_vertices)
-        self.pinned = self.pinned[src]
-        self.origin = self.origin[src]
-        self.model = self.build(self.mesh, self.pinned)
+        self.weld = weld
+        self.last_source = src_w  # new simulated vertex → the old one it continues
+        self.pinned = self.pinned[src_w]
+        self.origin = self.origin[src_w]
+        self.model = self._build()
         self._refresh()
         cls = type(state)
-        return cls(np.asarray(state.x)[src].copy(), np.asarray(state.v)[src].copy(), state.t)
+        return cls(np.asarray(state.x)[src_w].copy(), np.asarray(state.v)[src_w].copy(), state.t)
 
 
 def simulate_tearing(cloth: TearableCloth, state, *, duration: float, fps: float = 25.0, integrator: str = "implicit",

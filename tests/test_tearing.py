@@ -112,6 +112,33 @@ def test_a_brush_cut_leaves_a_new_boundary_loop_in_the_obj(tmp_path):
         Cut(0.0, [(0, 0, 0)], 0.0)
 
 
+def test_a_separating_cut_splits_the_cloth_without_losing_any():
+    """Scissors: the edges along the polyline break; no triangle goes, mass and momentum are exact."""
+    mesh = grid(1.0, 1.0, 21)
+    cloth = TearableCloth(mesh, lambda m, pin: build_model(m, COTTON, gravity=(0, 0, 0), pinned=pin), tear_strain=0.0)
+    state = cloth.model.state(np.c_[mesh.uv - 0.5, np.zeros(mesh.vertex_count)])
+    state.v[:] = np.random.default_rng(5).standard_normal(state.v.shape)
+    m0 = np.asarray(cloth.model.vertex_mass)
+    p0 = m0 @ state.v
+    # a slit inside the cloth: a new boundary loop (its ends stay joined)
+    state = cloth.cut(state, Cut(0.0, [(-0.3, 0.013, 0.0), (0.3, 0.013, 0.0)], 0.06, separate=True))
+    assert cloth.mesh.face_count == mesh.face_count and boundary_loops(cloth.mesh.faces) == 2
+    assert components(cloth.mesh.faces, cloth.mesh.vertex_count) == 1
+    split = cloth.mesh.vertex_count - mesh.vertex_count
+    assert 10 <= split <= 14  # 0.6 m of slit at 5 cm spacing: 11 vertices inside it split, its two ends do not
+    m1 = np.asarray(cloth.model.vertex_mass)
+    assert m1.sum() == pytest.approx(m0.sum(), rel=1e-13)
+    np.testing.assert_allclose(m1 @ state.v, p0, rtol=1e-12, atol=1e-14)
+    assert_valid(cloth.mesh.faces)
+    # across the whole cloth, and on along a bend: two pieces
+    state = cloth.cut(state, Cut(0.0, [(0.013, -0.6, 0.0), (0.013, 0.2, 0.0), (0.6, 0.3, 0.0)], 0.06, separate=True))
+    assert components(cloth.mesh.faces, cloth.mesh.vertex_count) == 2
+    assert cloth.mesh.face_count == mesh.face_count
+    assert_valid(cloth.mesh.faces)
+    with pytest.raises(ValueError, match="two points"):
+        Cut(0.0, [(0, 0, 0)], 0.1, separate=True)
+
+
 def flag(n=11):
     mesh = grid(1.0, 0.6, n, max(3, round(0.6 * n)))
     pole = np.flatnonzero(mesh.uv[:, 0] < 1e-9)
