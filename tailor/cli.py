@@ -199,11 +199,17 @@ def _cmd_drape(args) -> int:
 
     formats = _formats(args.format)  # checked before a long run, not after
     wind = _wind(args.wind, args.turbulence)
+    cuts = []
+    if args.cuts:
+        from .io.cuts import read_cuts
+
+        cuts = read_cuts(args.cuts)
+    if (args.cuts or args.tear) and (args.preview or any(f != "obj" for f in formats)):
+        raise TailorError("--cuts/--tear change the garment's mesh during the run: only the OBJ sequence can hold "
+                          "that (leave out --format and --preview)")
     pattern = read_pattern(args.pattern)
     out = Path(args.out) if args.out else Path("out") / pattern.name
     if out.exists() and not args.overwrite:
-        from .errors import TailorError
-
         raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
     body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base)
     fabric = None
@@ -216,7 +222,8 @@ def _cmd_drape(args) -> int:
     try:
         result = drape(pattern, body, fabric, frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2,
                        integrator=args.integrator, sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
-                       self_collision=args.self_collision, quality=args.quality, wind=wind, progress=bars)
+                       self_collision=args.self_collision, quality=args.quality, wind=wind, cuts=cuts,
+                       tear=args.tear, progress=bars)
     finally:
         bars.close()
     write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
@@ -540,6 +547,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--wind", metavar="SPEED[,DX,DY,DZ]",
                    help="wind on the sewn garment, m/s (direction default +x; a breeze 3, a gale 20)")
     d.add_argument("--turbulence", type=float, default=0.3, help="gust strength relative to the wind speed (default 0.3)")
+    d.add_argument("--cuts", metavar="FILE", help="a cuts file: the brush cuts holes or slits at given times "
+                   "(JSON, cm; see docs/pattern-format.md)")
+    d.add_argument("--tear", action="store_true", help="let the garment tear beyond its fabric's tear_strain")
     d.add_argument("--record-sewing", action="store_true", help="also write the sewing and settling frames")
     d.add_argument("--with-body", action="store_true", help="also write the body of every frame")
     d.add_argument("--out", metavar="DIR", help="output folder (default out/<pattern name>)")

@@ -34,6 +34,7 @@ from .placement import place_panels
 from .integrators import Contacts, make_integrator
 from .seams import Sewing, merge_state
 from .sim import Guard, quality as sim_quality, held_impulse, hold_contacts, max_stretch, simulate
+from .tearing import Cut, TearableCloth
 
 __all__ = ["drape", "DrapeResult", "DrapeProgress", "NEAR_SEAM", "NEAR_RATE"]
 
@@ -93,6 +94,9 @@ class DrapeResult:
     pattern : Pattern
     report : dict
         Inputs, derived parameters, steps and wall time per phase, seam gaps, penetration.
+    topology : list of (frame, GarmentMesh, weld)
+        Where a cut or a tear changed the garment's mesh: from that frame on, frames hold the
+        vertices of that mesh (``mesh`` and ``weld`` above are frame 0's). Empty if it never changed.
     """
 
     frames: list
@@ -102,6 +106,15 @@ class DrapeResult:
     body_faces: np.ndarray
     pattern: object
     report: dict = field(default_factory=dict)
+    topology: list = field(default_factory=list)
+
+    def topology_at(self, frame: int):
+        """``(mesh, weld)`` of frame ``frame``."""
+        mesh, weld = self.mesh, self.weld
+        for first, m, w in self.topology:
+            if first <= frame:
+                mesh, weld = m, w
+        return mesh, weld
 
 
 @dataclass(frozen=True)
@@ -157,7 +170,8 @@ class _Attachments:
 
 def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DEFAULT_RESOLUTION,
           integrator: str = "implicit", sew_timeout: float = 4.0, settle: float = 1.0, record_sewing: bool = False,
-          self_collision: str = "auto", quality: str = "final", wind=None, on_frame=None, progress=None) -> DrapeResult:
+          self_collision: str = "auto", quality: str = "final", wind=None, cuts=(), tear: bool = False, on_frame=None,
+          progress=None) -> DrapeResult:
     """Dress ``body`` in ``pattern`` and animate it.
 
     Parameters
@@ -182,6 +196,13 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         the garment tests validate.
     wind : Wind or (3,) air velocity [m/s], optional
         Blows on the garment once it is sewn (:class:`tailor.forces.wind.Wind`: turbulent Perlin noise).
+    cuts : sequence of :class:`~tailor.tearing.Cut`
+        The brush on the dressed garment: ``time`` counts from frame 0, points are in the body's
+        frame [m]. A cut is made after the first step ending at or after its time.
+    tear : bool
+        Let the garment tear where it is stretched across an edge beyond its fabric's
+        ``tear_strain`` (the smallest among its panels' fabrics), from frame 0 on.
+        With cuts or tearing the mesh may change: see :attr:`DrapeResult.topology`.
     on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
     progress : callable ``progress(DrapeProgress)``, optional
         Called after every frame of every phase.
@@ -194,6 +215,9 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     t_start = time.perf_counter()
     if self_collision not in SELF_COLLISION_MODES:
         raise ValueError(f"self_collision must be one of {', '.join(SELF_COLLISION_MODES)}, got {self_collision!r}")
+    cuts = sorted(cuts, key=lambda c: c.time)
+    if not all(isinstance(c, Cut) for c in cuts):
+        raise TypeError("cuts must be tailor.tearing.Cut objects")
     if isinstance(fabric, str):
         fabric = preset(fabric)
     base = fabric if isinstance(fabric, Fabric) else pattern.fabric
@@ -241,6 +265,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               ) if cond]}
     sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
            "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0, "self": None,
+           "self_key": None, "topology": 0,
            "steps": 0}
 
     def tell(phase, done, total, state):
@@ -305,9 +330,15 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             hold_contacts(integ, model_, collider.contact_set)
         if self_collision != "off" and sim["gravity"]:  # sewn: layers may no longer pass through each other
             selfc = sim["self"]
-            if selfc is None or selfc.n != model_.vertex_count:  # welding renumbered the vertices
+            key = (model_.vertex_count, sim["topology"])
+            if selfc is None or sim["self_key"] != key:
+                # welding (or a cut or a tear) renumbered the vertices
+                stats = selfc.stats if selfc is not None else None
                 selfc = sim["self"] = SelfCollider(model_.faces, model_.face_panel, state.x, thickness=thickness,
-                                                   mode=self_collision, friction=float(np.mean(sim["friction"])))
+                                                   mode=self_collision, friction=float(np.mean(mu)))
+                if stats is not None:
+                    selfc.carry_stats(stats)
+                sim["self_key"] = key
                 sim["self_inv_mass"] = np.where(model_.vertex_pinned, 0.0, 1.0 / np.asarray(model_.vertex_mass))
             selfc.respond(sim["self_inv_mass"], state, dt)
 
@@ -326,7 +357,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     if body_speed > 0:
         motion_dt = min(still_dt or 0.01, 0.5 * collider.margin / body_speed)
 
-    def advance(state, duration):
+    def advance(state, duration, rescue_after=True):
         """Simulate ``duration`` seconds on the current welded model; return the final state."""
         t = state.t
         last = state
@@ -344,7 +375,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
                                 hooks=[hook], forces=forces, guard=guard, dt=dt):
             continue
         last.t = t + duration
-        rescue(last)
+        if rescue_after:
+            rescue(last)
         return last
 
     def rescue(state):
@@ -447,9 +479,57 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     t0 = time.perf_counter()
     sim["motion_start"] = state.t
     penetration, crossings = [], []
+    cloth, segments, weld_frame0 = None, [], sim["weld"]
+    if cuts or tear:  # the mesh may change: a TearableCloth owns it (and the weld) from here on
+        strain = min((f_.tear_strain for f_ in fabrics.values() if f_.tear_strain > 0), default=0.0) if tear else 0.0
+
+        def build(mesh_, pinned, weld):
+            m = build_model(mesh_, fabrics, air_density=AIR_DENSITY, weld=weld, compression=COMPRESSION)
+            return m.with_pins(np.flatnonzero(pinned)) if pinned.any() else m
+
+        cloth = TearableCloth(mesh, build, tear_strain=strain, pinned=sim["model"].vertex_pinned, weld=sim["weld"])
+        sim["model"] = cloth.model
+        report["active"].update(cuts=len(cuts), tearing=tear)
+        report["tearing"] = {"tear_strain": strain}
+
+    def change(state):
+        """Due cuts, then tearing; on a change, everything that numbers the vertices follows."""
+        old = cloth.model.vertex_count
+        before = cloth.mesh
+        while cuts and cuts[0].time <= state.t - sim["motion_start"] + 1e-9:
+            state = cloth.cut(state, cuts.pop(0))
+        torn = cloth.tear(state)
+        state = torn if torn is not None else state
+        if cloth.mesh is before:
+            return state
+        inverse = np.full(old, -1, np.intp)  # old simulated vertex → its new index (the first copy)
+        inverse[cloth.last_source[::-1]] = np.arange(len(cloth.last_source))[::-1]
+        if sim["attach"] is not None:
+            a = sim["attach"]
+            ids = inverse[a.ids]
+            ok = ids >= 0
+            sim["attach"] = _Attachments(ids[ok], a.tri[ok], a.bary[ok], a.offset[ok], a.faces)
+        sim["model"], sim["weld"] = cloth.model, cloth.weld
+        panel_friction = np.array([fabrics[i].friction for i in range(len(pattern.panels))])
+        sim["friction"] = panel_friction[cloth.mesh.vertex_panel[np.unique(cloth.weld, return_index=True)[1]]]
+        sim["topology"] += 1
+        collider.forget()
+        integ.reset()
+        if hasattr(integ, "contacts"):
+            integ.contacts = None
+        segments.append((len(out_frames), cloth.mesh, cloth.weld.copy()))
+        return state
+
+    sub = max(1, int(np.ceil(frame_dt / motion_dt - 1e-9))) if motion_dt else 1
     for f in range(frames):
-        if f:
+        if f and cloth is None:
             state = advance(state, frame_dt)
+        elif f:  # one step at a time: a crack runs on from step to step
+            for _ in range(sub):
+                state = change(advance(state, frame_dt / sub, rescue_after=False))
+            rescue(state)
+        elif cloth is not None:
+            state = change(state)
         bx, _, k = body_state(state.t)
         dist, tri, _, _ = collider.nearest(state.x, bx, k)
         inside = dist[tri >= 0]
@@ -469,4 +549,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     report["vertices_rescued_from_inside_body"] = sim["rescued"]
     report["welded_vertices"] = int(sim["model"].vertex_count)
     report["self_collision"] = sim["self"].report() if sim["self"] is not None else {"mode": self_collision}
-    return DrapeResult(out_frames, body_frames, mesh, sim["weld"], body.faces, pattern, report)
+    if cloth is not None:
+        report["tearing"].update(edges_torn=cloth.tears, topology_changes=len(segments),
+                                 events=[{"t_s": round(t_ - sim["motion_start"], 6), "edges": e} for t_, e in cloth.events])
+    return DrapeResult(out_frames, body_frames, mesh, weld_frame0, body.faces, pattern, report, topology=segments)

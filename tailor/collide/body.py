@@ -260,6 +260,12 @@ class BodyCollider:
         self.queries = 0
         self.queried_points = 0
 
+    def forget(self) -> None:
+        """Drop what is remembered per cloth vertex (the cloth's vertices were renumbered: a cut or a tear)."""
+        self._cache = None
+        self._previous = None
+        self.contact_set = _NO_CONTACTS
+
     def _body(self, frame):
         if frame not in self._bvh:
             self._bvh[frame] = bvh_object(self.frames[frame], self.faces)

@@ -600,6 +600,11 @@ class SelfCollider:
             _resolve(x, v, im, all_i, all_a, all_n, all_h, dt, self.friction, sweeps)
         return np.union1d(keys, seen)
 
+    def carry_stats(self, stats: dict) -> None:
+        """Continue the counters of a collider this one replaces (welding renumbered the cloth)."""
+        for k, v in stats.items():
+            self.stats[k] = max(self.stats[k], v) if k.startswith("max_") else self.stats[k] + v
+
     def report(self) -> dict:
         """What ran, for report.json."""
         s = dict(self.stats)

@@ -108,6 +108,10 @@ def welded(weld, faces, x):
 
 def animation_from_drape(result, *, with_body: bool = True) -> Animation:
     """The :class:`Animation` of a :class:`tailor.drape.DrapeResult` (welded, as the OBJ files are)."""
+    if getattr(result, "topology", None):
+        first = result.topology[0][0]
+        raise TailorError(f"the garment's mesh changes at frame {first} (a cut or a tear): only the OBJ sequence "
+                          "can hold that; export without --format pc2/glb/usd")
     mesh = result.mesh
     positions = np.stack([welded(result.weld, mesh.faces, x)[0] for x in result.frames])
     faces = result.weld[mesh.faces]

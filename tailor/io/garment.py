@@ -22,7 +22,8 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
 
     Files: ``garment_0000.obj`` … (``v`` welded so a seam is one vertex, ``vt`` the flat pattern in
     metres, one ``g`` per panel), ``garment.mtl``, optionally ``body_0000.obj`` …, and
-    ``report.json``. Everything is written into a temporary folder beside ``out_dir`` and renamed
+    ``report.json``. A garment cut or torn during the run is written with each frame's own mesh.
+    Everything is written into a temporary folder beside ``out_dir`` and renamed
     into place at the end; an existing ``out_dir`` is refused unless ``overwrite``.
     """
     out = Path(out_dir)
@@ -31,11 +32,11 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
-        mesh = result.mesh
-        names = mesh.panel_names
+        names = result.mesh.panel_names
         (tmp / "garment.mtl").write_text(mtl_text(names))
         for k, x in enumerate(result.frames):
-            xw, faces = welded(result.weld, mesh.faces, x)
+            mesh, weld = result.topology_at(k)  # a cut or a tear changes the mesh from its frame on
+            xw, faces = welded(weld, mesh.faces, x)
             text = obj_text(xw, faces, uv=mesh.uv, face_uv=mesh.faces, face_group=mesh.face_panel, group_names=names,
                             mtl="garment.mtl", header=f"tailor drape of {result.pattern.name}, frame {k}")
             (tmp / f"garment_{k:04d}.obj").write_text(text)
