@@ -30,7 +30,7 @@ from .forces import total_forces
 from .measure import find_landmarks
 from .mesh import DEFAULT_RESOLUTION, discretise
 from .model import AIR_DENSITY, build_model
-from .placement import place_panels
+from .placement import limb_walls, place_panels
 from .integrators import Contacts, make_integrator
 from .seams import Sewing, merge_state
 from .sim import Guard, quality as sim_quality, held_impulse, hold_contacts, max_stretch, simulate
@@ -231,6 +231,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     keys = TRANSITION_KEYS if has_rest else 0
     landmarks = find_landmarks(pose, body.faces)
     x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, pose, body.faces))
+    walls = limb_walls(pattern, mesh, landmarks)
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
     unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)
     mass = np.asarray(unwelded.vertex_mass)
@@ -317,8 +318,36 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     if hasattr(integ, "predict"):
         integ.predict = landing
 
+    def wall(state):
+        """While the body stands still (sewing, settling), a leg's panels stay on their side of the
+        plane between the legs, below the crotch (:func:`~tailor.placement.limb_walls`)."""
+        if sim.get("wall_weld") is not sim["weld"]:  # welded vertices whose members agree on one plane
+            normal, offset, below = walls
+            w, nw = sim["weld"], int(sim["weld"].max()) + 1
+            count = np.bincount(w, minlength=nw)
+            n_sum = np.zeros((nw, 3))
+            np.add.at(n_sum, w, normal)
+            same = np.isclose(np.linalg.norm(n_sum, axis=1), count) & (count > 0) & (np.linalg.norm(n_sum, axis=1) > 0)
+            first = np.unique(w, return_index=True)[1]
+            ids = np.flatnonzero(same)
+            sim["wall"] = (ids, normal[first[ids]], offset[first[ids]], below[first[ids]])
+            sim["wall_weld"] = sim["weld"]
+        ids, n, d, below = sim["wall"]
+        if not len(ids):
+            return
+        x, v = state.x[ids], state.v[ids]
+        depth = thickness - (np.einsum("ij,ij->i", x, n) - d)
+        hit = (depth > 0) & (x[:, 2] < below)
+        if hit.any():
+            i, nh = ids[hit], n[hit]
+            state.x[i] += depth[hit, None] * nh
+            vn = np.einsum("ij,ij->i", state.v[i], nh)
+            state.v[i] -= np.minimum(vn, 0.0)[:, None] * nh
+
     def hook(model_, state, dt):
         sim["steps"] += 1
+        if sim["transition_start"] is None:
+            wall(state)
         bx, bv, k = body_state(state.t)
         if sim["attach"] is not None:
             sim["attach"].apply(state, bx, bv)

@@ -20,14 +20,10 @@ import numpy as np
 from .errors import PatternError
 from .pattern import LandmarkPlacement, TransformPlacement
 
-__all__ = ["place_panels", "SLOPE", "MIDPLANE_GAP"]
+__all__ = ["place_panels", "limb_walls", "SLOPE"]
 
 SLOPE = 0.1
 """Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
-
-MIDPLANE_GAP = 0.03
-"""Distance [m] a panel rolled round one of a pair of limbs keeps from the plane between them
-(:func:`_keep_to_own_side`)."""
 
 
 def _frame(landmark):
@@ -174,30 +170,48 @@ def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
         anchor = np.array(pl.anchor) if pl.anchor is not None else np.array([0.5 * (lo[0] + hi[0]), hi[1]])
         share = 1.0 / counts[pl.landmark]
         x[ids] = _wrap(uv, anchor, lm, pl, share, inside)
-        x[ids] = _keep_to_own_side(x[ids], name, landmarks)
     return x
 
 
-def _keep_to_own_side(x, name, landmarks):
-    """Points of a panel rolled round one of a pair of limbs, kept on that limb's side.
-
-    A trouser leg's upper rows are rolled on cylinders wide enough to clear the hips, and the two
-    legs' cylinders then overlap between the legs: the left and right crotch extensions started
-    through each other, were sewn that way and stayed crossed (42 intersecting triangle pairs at
-    the crotch of the 4 cm trousers). A garment's left and right halves meet at the plane between
-    the limbs, so each panel's points are projected onto its own side of that plane, ``MIDPLANE_GAP``
-    from it; sewing closes the gap and relaxes the strain this makes. The gap is wide (3 cm): each
-    leg's inseam closes on the inner side of its leg, and with the legs' inner sides 1 cm apart the
-    two inseams met in one place and caught on each other (a 2 cm mesh stretched 11× at the shins).
-    """
+def _pair_plane(name, landmarks):
+    """(unit normal towards ``name``'s side, point) of the plane between a limb and its pair, or None."""
     for own, other in (("left_", "right_"), ("right_", "left_")):
         if name.startswith(own) and other + name[len(own):] in landmarks:
             c_own = np.asarray(landmarks[name].center, float)
             c_other = np.asarray(landmarks[other + name[len(own):]].center, float)
             n = (c_own - c_other) * np.array([1.0, 1.0, 0.0])
             if np.linalg.norm(n) < 1e-9:
-                return x
-            n /= np.linalg.norm(n)
-            side = (x - 0.5 * (c_own + c_other)) @ n
-            return x + np.maximum(MIDPLANE_GAP - side, 0.0)[:, None] * n
-    return x
+                return None
+            return n / np.linalg.norm(n), 0.5 * (c_own + c_other)
+    return None
+
+
+def limb_walls(pattern, mesh, landmarks):
+    """Per mesh vertex, the plane its panel may not cross while the garment is sewn: (N, 3) normals
+    (zero for panels not placed round one of a pair of limbs), (N,) offsets ``n · p`` and (N,)
+    heights [m] below which it holds (the limb landmark's: the crotch, the armpit lie above).
+
+    A trouser leg's upper rows are rolled on cylinders wide enough to clear the hips, and the two
+    legs' cylinders overlap between the legs; lower down, trouser legs are wider than legs and the
+    two tubes meet at the midplane while their inseams close. Sewn freely, the crotch extensions
+    passed through each other (42 intersecting pairs at 4 cm) and a 2 cm mesh passed through the
+    other leg at the knees (320 pairs); the self-collision pass that starts once the garment is
+    sewn then held them crossed, and the 2 cm trousers tore apart walking. A garment's left and
+    right halves meet at the plane between the limbs: while the body stands still the drape keeps
+    each leg's panels on their side of it (:func:`tailor.drape.drape`). Both counts are now 0.
+    """
+    normal = np.zeros((mesh.vertex_count, 3))
+    offset = np.zeros(mesh.vertex_count)
+    below = np.full(mesh.vertex_count, -np.inf)
+    for pi, panel in enumerate(pattern.panels):
+        pl = panel.placement
+        if not isinstance(pl, LandmarkPlacement) or not landmarks:
+            continue
+        plane = _pair_plane(pl.landmark, landmarks)
+        if plane is None:
+            continue
+        ids = mesh.panel_vertices(pi)
+        normal[ids] = plane[0]
+        offset[ids] = plane[0] @ plane[1]
+        below[ids] = landmarks[pl.landmark].height
+    return normal, offset, below

@@ -1,6 +1,7 @@
 """Dressing: merging conserves momentum, friction switches at tan θ = μ, a skirt dresses and walks."""
 
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -8,15 +9,13 @@ import pytest
 from conftest import PANELS, sheet
 from tailor.body import Body
 from tailor.cli import main
-from tailor.collide import BodyCollider, points_inside, self_intersections
+from tailor.collide import BodyCollider, self_intersections
 from tailor.drape import drape
 from tailor.geometry import connected_components
 from tailor.io import read_pattern
 from tailor.io.body_files import read_body
 from tailor.io.garment import write_drape
 from tailor.measure import find_landmarks
-from tailor.mesh import discretise
-from tailor.placement import MIDPLANE_GAP, place_panels
 from tailor.seams import Sewing, merge_state
 from tailor.units import GRAVITY
 
@@ -268,18 +267,21 @@ def test_trousers_and_dress_sew_into_one_piece_on_the_mannequin(name, mannequin)
         assert top < marks["neck"].height + 0.05 and result.frames[-1][:, 2].min() > marks["left_knee"].height - 0.15
 
 
-def test_trouser_legs_are_placed_apart_and_sewn_without_crossing_at_the_crotch(mannequin, monkeypatch):
-    """The two legs' widened cylinders overlap between the legs; placement keeps each leg on its
-    side of the midplane, or the crotch extensions are sewn through each other (and the
+def test_trouser_legs_are_sewn_without_crossing_each_other(mannequin, monkeypatch):
+    """The two legs' widened cylinders overlap between the legs; unless each leg is kept on its side
+    of the midplane while it is sewn, the crotch extensions are sewn through each other (and the
     self-collision pass then holds them crossed)."""
     pattern = read_pattern(PANELS / "trousers.json")
-    mesh = discretise(pattern, 0.04)
-    marks = find_landmarks(mannequin.vertices, mannequin.faces)
-    x0 = place_panels(pattern, mesh, marks, inside=lambda p: points_inside(p, mannequin.vertices, mannequin.faces))
-    assert len(self_intersections(x0, mesh.faces)) == 0
-    left = np.concatenate([mesh.panel_vertices(pattern.panel_index(n)) for n in ("front_left", "back_left")])
-    assert x0[left, 0].min() >= MIDPLANE_GAP - 1e-12  # the left leg on the body's left (+X) of the midplane
-    monkeypatch.setattr("tailor.placement.MIDPLANE_GAP", -1.0)  # legs rolled on their own cylinders only
+    sewn = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2)
+    assert sewn.report["self_intersections_per_frame"] == [0]
+    x = sewn.frames[0]
+    for name, sign in (("front_left", 1), ("back_right", -1)):
+        legs = sewn.mesh.panel_vertices(pattern.panel_index(name))
+        low = legs[x[legs, 2] < 0.6]
+        assert (sign * x[low, 0] > 0).all()  # below the crotch, each leg on its own side
+    free = lambda pattern, mesh, landmarks: (np.zeros((mesh.vertex_count, 3)), np.zeros(mesh.vertex_count),  # noqa: E731
+                                             np.full(mesh.vertex_count, -np.inf))
+    monkeypatch.setattr(sys.modules["tailor.drape"], "limb_walls", free)  # ``tailor.drape`` names the function
     crossed = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2)
     assert crossed.report["self_intersections_per_frame"][0] > 10
 
