@@ -242,7 +242,8 @@ def _cmd_drape(args) -> int:
           f"{len(result.frames)} frames, max penetration {r['max_penetration_m'] * 1000:.1f} mm, "
           f"seam gap at merge {r['phases']['sewing']['max_gap_at_merge_m'] * 1000:.1f} mm, "
           f"self-intersections {max(r['self_intersections_per_frame'], default=0)}, "
-          f"{time.perf_counter() - t0:.1f} s -> {out}/")
+          + (f"{len(cuts)} cuts and {r['tearing']['edges_torn']} edges torn, " if "tearing" in r else "")
+          + f"{time.perf_counter() - t0:.1f} s -> {out}/")
     return 0
 
 

@@ -266,7 +266,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               ) if cond]}
     sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
            "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0, "self": None,
-           "self_key": None, "topology": 0,
+           "self_key": None, "topology": 0, "wall": None, "wall_weld": None,
            "steps": 0}
 
     def tell(phase, done, total, state):
@@ -321,7 +321,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     def wall(state):
         """While the body stands still (sewing, settling), a leg's panels stay on their side of the
         plane between the legs, below the crotch (:func:`~tailor.placement.limb_walls`)."""
-        if sim.get("wall_weld") is not sim["weld"]:  # welded vertices whose members agree on one plane
+        if sim["wall_weld"] is not sim["weld"]:  # welded vertices whose members agree on one plane
             normal, offset, below = walls
             w, nw = sim["weld"], int(sim["weld"].max()) + 1
             count = np.bincount(w, minlength=nw)
@@ -335,7 +335,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         ids, n, d, below = sim["wall"]
         if not len(ids):
             return
-        x, v = state.x[ids], state.v[ids]
+        x = state.x[ids]
         depth = thickness - (np.einsum("ij,ij->i", x, n) - d)
         hit = (depth > 0) & (x[:, 2] < below)
         if hit.any():

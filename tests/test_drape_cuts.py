@@ -31,6 +31,7 @@ def test_a_cuts_file_cuts_the_draped_skirt_and_each_obj_frame_has_its_own_mesh(t
     out = tmp_path / "cut"
     assert main(["--quiet", "drape", str(PANELS / "skirt.json"), "--resolution", "4", "--frames", "4", "--cuts",
                  str(cuts), "--out", str(out)]) == 0
+    assert "2 cuts and 0 edges torn" in capsys.readouterr().out
     frames = _frames(out)
     assert len(frames) == 4
     loops = [boundary_loops(f.faces) for f in frames]
