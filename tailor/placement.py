@@ -196,7 +196,7 @@ def limb_walls(pattern, mesh, landmarks):
     two tubes meet at the midplane while their inseams close. Sewn freely, the crotch extensions
     passed through each other (42 intersecting pairs at 4 cm) and a 2 cm mesh passed through the
     other leg at the knees (320 pairs); the self-collision pass that starts once the garment is
-    sewn then held them crossed, and the 2 cm trousers tore apart walking. A garment's left and
+    sewn then held them crossed, and the 2 cm trousers stopped unstable walking. A garment's left and
     right halves meet at the plane between the limbs: while the body stands still the drape keeps
     each leg's panels on their side of it (:func:`tailor.drape.drape`). Both counts are now 0.
     """
