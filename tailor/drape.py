@@ -235,7 +235,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
     unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)
     mass = np.asarray(unwelded.vertex_mass)
-    friction_of = np.array([fabrics[p].friction for p in mesh.vertex_panel])
+    panel_friction = np.array([fabrics[i].friction for i in range(len(pattern.panels))])
+    friction_of = panel_friction[mesh.vertex_panel]
     sewing = Sewing(mesh.seam_pairs, merge_distance=max(0.3 * resolution, 0.002))
     # collider frames: the dressing pose, the transition's key poses, then the motion
     if keys:
@@ -539,7 +540,6 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             ok = ids >= 0
             sim["attach"] = _Attachments(ids[ok], a.tri[ok], a.bary[ok], a.offset[ok], a.faces)
         sim["model"], sim["weld"] = cloth.model, cloth.weld
-        panel_friction = np.array([fabrics[i].friction for i in range(len(pattern.panels))])
         sim["friction"] = panel_friction[cloth.mesh.vertex_panel[np.unique(cloth.weld, return_index=True)[1]]]
         sim["topology"] += 1
         collider.forget()

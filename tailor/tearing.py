@@ -262,15 +262,15 @@ class TearableCloth:
             groups = _fan_groups(wf, self.broken, v)
             if len(groups) < 2:
                 continue
+            corner = {f: int(np.flatnonzero(wf[f] == v)[0]) for members in groups for f in members}
             owner = {}  # mesh vertex at v → groups of its triangles there
             for gi, members in enumerate(groups):
                 for f in members:
-                    owner.setdefault(int(self.mesh.faces[f][wf[f] == v][0]), set()).add(gi)
+                    owner.setdefault(int(self.mesh.faces[f, corner[f]]), set()).add(gi)
             for gi, members in enumerate(groups[1:], start=1):
                 copies = {}
                 for f in members:
-                    corner = int(np.flatnonzero(wf[f] == v)[0])
-                    o = int(self.mesh.faces[f, corner])
+                    o = int(self.mesh.faces[f, corner[f]])
                     if owner[o] == {gi}:  # all of this mesh vertex's triangles here: it moves
                         weld[o] = next_w
                     else:
@@ -278,7 +278,7 @@ class TearableCloth:
                             copies[o] = len(mesh_src)
                             mesh_src.append(o)
                             weld.append(next_w)
-                        faces[f, corner] = copies[o]
+                        faces[f, corner[f]] = copies[o]
                 w_src.append(int(v))
                 next_w += 1
         if not w_src:
