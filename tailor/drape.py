@@ -11,7 +11,9 @@
    :data:`TRANSITION` seconds, so panels are never placed round a leg in mid-stride;
 4. **motion** — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
 
-Body contact (Eq. 9–14) acts in every phase through :class:`~tailor.collide.BodyCollider`.
+Body contact (Eq. 9–14) acts in every phase through :class:`~tailor.collide.BodyCollider`, and
+panels rolled round one of a pair of limbs (trouser legs) keep to their side of the plane between
+the limbs below the limb's landmark, the plane following the body (:func:`~tailor.placement.limb_walls`).
 Nothing here writes files: frames go to the caller (``on_frame``) and into the result.
 """
 
@@ -28,7 +30,7 @@ from .errors import SimulationError
 from .fabric import Fabric, preset
 from .forces import total_forces
 from .measure import find_landmarks
-from .mesh import DEFAULT_RESOLUTION, discretise
+from .mesh import discretise
 from .model import AIR_DENSITY, build_model
 from .placement import limb_walls, place_panels
 from .integrators import Contacts, make_integrator
@@ -36,7 +38,10 @@ from .seams import Sewing, merge_state
 from .sim import Guard, quality as sim_quality, held_impulse, hold_contacts, max_stretch, simulate
 from .tearing import Cut, TearableCloth
 
-__all__ = ["drape", "DrapeResult", "DrapeProgress", "NEAR_SEAM", "NEAR_RATE"]
+__all__ = ["drape", "DrapeResult", "DrapeProgress", "NEAR_SEAM", "NEAR_RATE", "DRAPE_RESOLUTION"]
+
+DRAPE_RESOLUTION = 0.02
+"""Default garment mesh edge length [m] of :func:`drape` and ``tailor drape`` (2 cm)."""
 
 NEAR_SEAM = 0.08
 """Seam pairs closer than this [m] are pulled by stiff implicit springs."""
@@ -168,7 +173,7 @@ class _Attachments:
         state.v[self.ids] = (body_v[f] * self.bary[:, :, None]).sum(axis=1)
 
 
-def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DEFAULT_RESOLUTION,
+def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, resolution: float = DRAPE_RESOLUTION,
           integrator: str = "implicit", sew_timeout: float = 4.0, settle: float = 1.0, record_sewing: bool = False,
           self_collision: str = "auto", quality: str = "final", wind=None, cuts=(), tear: bool = False, on_frame=None,
           progress=None) -> DrapeResult:
@@ -231,7 +236,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     keys = TRANSITION_KEYS if has_rest else 0
     landmarks = find_landmarks(pose, body.faces)
     x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, pose, body.faces))
-    walls = limb_walls(pattern, mesh, landmarks)
+    walls = limb_walls(pattern, landmarks, pose)
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
     unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)
     mass = np.asarray(unwelded.vertex_mass)
@@ -259,7 +264,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
               "quality": {"name": preset_q.name, "max_step_s": preset_q.step, "solver_tolerance": preset_q.tolerance},
               "active": {"bending": unwelded.has_bending, "air": True, "wind": wind is not None, "body_collision": True,
-                         "self_collision": self_collision},
+                         "self_collision": self_collision,
+                         "limb_walls": [p.name for i, p in enumerate(pattern.panels) if walls.panel[i] >= 0]},
               "skipped": [reason for cond, reason in (
                   (not unwelded.has_bending, "bending (every fabric has bending number 0)"),
                   (self_collision == "off", "self-collision (--self-collision off)"),
@@ -267,7 +273,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
               ) if cond]}
     sim = {"weld": np.arange(n), "model": unwelded, "gravity": False, "pins": np.zeros(0, np.intp), "friction": friction_of,
            "attach": None, "motion_start": None, "transition_start": None, "rebuilds": 0, "rescued": 0, "self": None,
-           "self_key": None, "topology": 0, "wall": None, "wall_weld": None,
+           "self_key": None, "topology": 0, "wall": None, "wall_weld": None, "mesh": mesh,
            "steps": 0}
 
     def tell(phase, done, total, state):
@@ -319,37 +325,36 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     if hasattr(integ, "predict"):
         integ.predict = landing
 
-    def wall(state):
-        """While the body stands still (sewing, settling), a leg's panels stay on their side of the
-        plane between the legs, below the crotch (:func:`~tailor.placement.limb_walls`)."""
-        if sim["wall_weld"] is not sim["weld"]:  # welded vertices whose members agree on one plane
-            normal, offset, below = walls
+    def wall(state, bx, bv):
+        """A leg's panels stay on their side of the plane between the legs, below the crotch, as the
+        body moves (:func:`~tailor.placement.limb_walls`): inelastic, like a body contact."""
+        if sim["wall_weld"] is not sim["weld"]:  # welded vertices whose members agree on one wall
             w, nw = sim["weld"], int(sim["weld"].max()) + 1
-            count = np.bincount(w, minlength=nw)
-            n_sum = np.zeros((nw, 3))
-            np.add.at(n_sum, w, normal)
-            same = np.isclose(np.linalg.norm(n_sum, axis=1), count) & (count > 0) & (np.linalg.norm(n_sum, axis=1) > 0)
-            first = np.unique(w, return_index=True)[1]
-            ids = np.flatnonzero(same)
-            sim["wall"] = (ids, normal[first[ids]], offset[first[ids]], below[first[ids]])
+            lo = np.full(nw, walls.count)
+            hi = np.full(nw, -1)
+            of = walls.of(sim["mesh"])
+            np.minimum.at(lo, w, of)
+            np.maximum.at(hi, w, of)
+            ids = np.flatnonzero((lo == hi) & (hi >= 0))
+            sim["wall"] = (ids, hi[ids])
             sim["wall_weld"] = sim["weld"]
-        ids, n, d, below = sim["wall"]
+        ids, which = sim["wall"]
         if not len(ids):
             return
-        x = state.x[ids]
-        depth = thickness - (np.einsum("ij,ij->i", x, n) - d)
-        hit = (depth > 0) & (x[:, 2] < below)
+        normal, offset, height, speed = walls.at(bx, bv)
+        n, x = normal[which], state.x[ids]
+        depth = thickness - (np.einsum("ij,ij->i", x, n) - offset[which])
+        hit = (depth > 0) & (x[:, 2] < height[which])
         if hit.any():
             i, nh = ids[hit], n[hit]
             state.x[i] += depth[hit, None] * nh
-            vn = np.einsum("ij,ij->i", state.v[i], nh)
+            vn = np.einsum("ij,ij->i", state.v[i], nh) - speed[which[hit]]
             state.v[i] -= np.minimum(vn, 0.0)[:, None] * nh
 
     def hook(model_, state, dt):
         sim["steps"] += 1
-        if sim["transition_start"] is None:
-            wall(state)
         bx, bv, k = body_state(state.t)
+        wall(state, bx, bv)
         if sim["attach"] is not None:
             sim["attach"].apply(state, bx, bv)
         # sewing is assembly: panels slide over the body into place without friction
@@ -539,7 +544,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
             ids = inverse[a.ids]
             ok = ids >= 0
             sim["attach"] = _Attachments(ids[ok], a.tri[ok], a.bary[ok], a.offset[ok], a.faces)
-        sim["model"], sim["weld"] = cloth.model, cloth.weld
+        sim["model"], sim["weld"], sim["mesh"] = cloth.model, cloth.weld, cloth.mesh
         sim["friction"] = panel_friction[cloth.mesh.vertex_panel[np.unique(cloth.weld, return_index=True)[1]]]
         sim["topology"] += 1
         collider.forget()

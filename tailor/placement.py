@@ -14,13 +14,14 @@ Two kinds of placement come from the pattern:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import PatternError
 from .pattern import LandmarkPlacement, TransformPlacement
 
-__all__ = ["place_panels", "limb_walls", "SLOPE"]
+__all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE"]
 
 SLOPE = 0.1
 """Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
@@ -174,7 +175,7 @@ def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
 
 
 def _pair_plane(name, landmarks):
-    """(unit normal towards ``name``'s side, point) of the plane between a limb and its pair, or None."""
+    """(unit normal towards ``name``'s side, point, the pair's name) of the plane between a limb and its pair, or None."""
     for own, other in (("left_", "right_"), ("right_", "left_")):
         if name.startswith(own) and other + name[len(own):] in landmarks:
             c_own = np.asarray(landmarks[name].center, float)
@@ -182,14 +183,74 @@ def _pair_plane(name, landmarks):
             n = (c_own - c_other) * np.array([1.0, 1.0, 0.0])
             if np.linalg.norm(n) < 1e-9:
                 return None
-            return n / np.linalg.norm(n), 0.5 * (c_own + c_other)
+            return n / np.linalg.norm(n), 0.5 * (c_own + c_other), other + name[len(own):]
     return None
 
 
-def limb_walls(pattern, mesh, landmarks):
-    """Per mesh vertex, the plane its panel may not cross while the garment is sewn: (N, 3) normals
-    (zero for panels not placed round one of a pair of limbs), (N,) offsets ``n · p`` and (N,)
-    heights [m] below which it holds (the limb landmark's: the crotch, the armpit lie above).
+@dataclass(frozen=True)
+class LimbWalls:
+    """The planes between paired limbs that a garment's left and right halves keep to (:func:`limb_walls`).
+
+    Attributes
+    ----------
+    panel : (P,) int
+        Wall of each panel, −1 for none (:meth:`of` gives a mesh's vertices theirs).
+    normal : (W, 3)
+        Unit normal of each wall in the rest pose, pointing to its own side.
+    point : (W, 3)
+        A point of each wall (midway between the two limbs' centres) in the rest pose [m].
+    below : (W,)
+        Height [m] below which each wall holds in the rest pose (the limb landmark's).
+    own, other : tuple of (K,) int arrays
+        Body vertices round each wall's own limb and its pair at the landmark (empty: the wall
+        does not follow the body).
+    rest : (V, 3) or None
+        The body's rest positions those vertices are measured from.
+    """
+
+    panel: np.ndarray
+    normal: np.ndarray
+    point: np.ndarray
+    below: np.ndarray
+    own: tuple = ()
+    other: tuple = ()
+    rest: np.ndarray | None = None
+
+    @property
+    def count(self) -> int:
+        return len(self.normal)
+
+    def of(self, mesh) -> np.ndarray:
+        """(N,) wall of each vertex of ``mesh`` (a garment mesh of the pattern, possibly cut), −1 for none."""
+        return self.panel[mesh.vertex_panel] if len(self.panel) else np.full(mesh.vertex_count, -1)
+
+    def at(self, body_x=None, body_v=None):
+        """(normals (W, 3), offsets n·p (W,), heights (W,), normal speeds (W,)) with the body at ``body_x``.
+
+        Each wall moves with the mean of the two limbs' vertices round it (a body swaying or
+        walking forward carries it along) and keeps its rest orientation.
+        """
+        point, below, speed = self.point.copy(), self.below.copy(), np.zeros(self.count)
+        if body_x is not None and self.rest is not None:
+            for w, (a, b) in enumerate(zip(self.own, self.other)):
+                shift = 0.5 * (body_x[a].mean(axis=0) - self.rest[a].mean(axis=0)
+                               + body_x[b].mean(axis=0) - self.rest[b].mean(axis=0))
+                point[w] += shift
+                below[w] += shift[2]
+                if body_v is not None:
+                    speed[w] = self.normal[w] @ (0.5 * (body_v[a].mean(axis=0) + body_v[b].mean(axis=0)))
+        return self.normal, np.einsum("ij,ij->i", self.normal, point), below, speed
+
+
+def no_walls(panel_count: int) -> LimbWalls:
+    """Walls for a garment none of whose panels lies round one of a pair of limbs."""
+    return LimbWalls(np.full(panel_count, -1), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0))
+
+
+def limb_walls(pattern, landmarks, body_x=None) -> LimbWalls:
+    """The plane each panel rolled round one of a pair of limbs (trouser legs round the thighs) may
+    not cross below that limb's landmark, as a :class:`LimbWalls` following the body ``body_x``
+    (rest pose, (V, 3); None: fixed planes).
 
     A trouser leg's upper rows are rolled on cylinders wide enough to clear the hips, and the two
     legs' cylinders overlap between the legs; lower down, trouser legs are wider than legs and the
@@ -197,12 +258,13 @@ def limb_walls(pattern, mesh, landmarks):
     passed through each other (42 intersecting pairs at 4 cm) and a 2 cm mesh passed through the
     other leg at the knees (320 pairs); the self-collision pass that starts once the garment is
     sewn then held them crossed, and the 2 cm trousers stopped unstable walking. A garment's left and
-    right halves meet at the plane between the limbs: while the body stands still the drape keeps
-    each leg's panels on their side of it (:func:`tailor.drape.drape`). Both counts are now 0.
+    right halves meet at the plane between the limbs: the drape keeps each leg's panels on their side
+    of it (:func:`tailor.drape.drape`). Both counts are now 0. Walking, the two legs' inner sides
+    still met there, scissored past each other with the thighs and tangled (57 pairs in one frame
+    at 1.5 cm, then the crotch tore to 5×): the walls now follow the body through the motion too.
     """
-    normal = np.zeros((mesh.vertex_count, 3))
-    offset = np.zeros(mesh.vertex_count)
-    below = np.full(mesh.vertex_count, -np.inf)
+    index = np.full(len(pattern.panels), -1)
+    walls: dict = {}
     for pi, panel in enumerate(pattern.panels):
         pl = panel.placement
         if not isinstance(pl, LandmarkPlacement) or not landmarks:
@@ -210,8 +272,27 @@ def limb_walls(pattern, mesh, landmarks):
         plane = _pair_plane(pl.landmark, landmarks)
         if plane is None:
             continue
-        ids = mesh.panel_vertices(pi)
-        normal[ids] = plane[0]
-        offset[ids] = plane[0] @ plane[1]
-        below[ids] = landmarks[pl.landmark].height
-    return normal, offset, below
+        index[pi] = walls.setdefault(pl.landmark, (len(walls), plane))[0]
+    if not walls:
+        return no_walls(len(pattern.panels))
+    names = sorted(walls, key=lambda k: walls[k][0])
+    normal = np.array([walls[k][1][0] for k in names])
+    point = np.array([walls[k][1][1] for k in names])
+    below = np.array([landmarks[k].height for k in names])
+    if body_x is None:
+        return LimbWalls(index, normal, point, below)
+    body_x = np.asarray(body_x, float)
+    own = tuple(_round_limb(body_x, landmarks[k]) for k in names)
+    other = tuple(_round_limb(body_x, landmarks[walls[k][1][2]]) for k in names)
+    return LimbWalls(index, normal, point, below, own, other, body_x)
+
+
+def _round_limb(body_x, landmark, band: float = 0.02):
+    """Body vertices on the landmark's cross-section (within ``band`` of its plane and 1 cm of its outline)."""
+    c = np.asarray(landmark.center, float)
+    axis = np.asarray(landmark.axis, float) / np.linalg.norm(landmark.axis)
+    d = body_x - c
+    along = d @ axis
+    across = np.linalg.norm(d - along[:, None] * axis, axis=1)
+    ids = np.flatnonzero((np.abs(along) < band) & (across < 0.5 * max(landmark.width, landmark.depth) + 0.01))
+    return ids if len(ids) else np.array([int(np.argmin(np.linalg.norm(d, axis=1)))])

@@ -74,18 +74,24 @@ def test_rigidly_placed_panels_slide_out_of_the_body(garmentcode_dir, mannequin)
         assert np.linalg.norm(np.cross(shift[0], normal)) < 1e-12  # along the panel's normal
 
 
-def test_only_trouser_legs_get_a_wall_at_the_midplane_below_the_crotch(mannequin):
+def test_only_trouser_legs_get_a_wall_at_the_midplane_below_the_crotch_following_the_body(mannequin):
     marks = find_landmarks(mannequin.vertices, mannequin.faces)
     pattern = read_pattern(PANELS / "trousers.json")
     mesh = discretise(pattern, 0.04)
-    normal, offset, below = limb_walls(pattern, mesh, marks)
+    walls = limb_walls(pattern, marks, mannequin.vertices)
+    of = walls.of(mesh)
+    normal, offset, below, speed = walls.at(mannequin.vertices, np.zeros_like(mannequin.vertices))
     for name, sign in (("front_left", 1), ("back_left", 1), ("front_right", -1), ("back_right", -1)):
         ids = mesh.panel_vertices(pattern.panel_index(name))
-        assert np.allclose(normal[ids], [sign, 0, 0], atol=1e-3)  # pointing to its own side (left = +X)
-        assert np.allclose(below[ids], marks["left_thigh"].height, atol=1e-3)
-    band = mesh.panel_vertices(pattern.panel_index("wb_front"))
-    assert not normal[band].any() and np.isneginf(below[band]).all()
+        assert np.allclose(normal[of[ids]], [sign, 0, 0], atol=1e-3)  # pointing to its own side (left = +X)
+        assert np.allclose(below[of[ids]], marks["left_thigh"].height, atol=1e-3)
+    assert np.allclose(offset, 0.0, atol=2e-3) and not speed.any()  # the plane between the thighs
+    assert (of[mesh.panel_vertices(pattern.panel_index("wb_front"))] == -1).all()
+    # the walls follow the body: shifted 5 cm to the left and moving, so do they
+    moved = mannequin.vertices + [0.05, 0.0, 0.01]
+    n2, d2, b2, s2 = walls.at(moved, np.tile([0.5, 0.0, 0.0], (len(moved), 1)))
+    assert np.allclose(d2, offset + normal[:, 0] * 0.05) and np.allclose(b2, below + 0.01)
+    assert np.allclose(s2, 0.5 * normal[:, 0])
     tshirt = read_pattern(PANELS / "tshirt.json")  # sleeves round the arms: a pair of limbs too, but far apart
     tmesh = discretise(tshirt, 0.04)
-    tn = limb_walls(tshirt, tmesh, marks)[0]
-    assert not tn[tmesh.panel_vertices(tshirt.panel_index("front"))].any()
+    assert (limb_walls(tshirt, marks).of(tmesh)[tmesh.panel_vertices(tshirt.panel_index("front"))] == -1).all()
