@@ -189,7 +189,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     frames : int
         Frames to produce after the garment is dressed (frame 0 included).
     resolution : float
-        Mesh edge length [m].
+        Mesh edge length [m] (:data:`DRAPE_RESOLUTION`, 2 cm, as ``tailor drape``).
     record_sewing : bool
         Also return the sewing and settling as frames (before frame 0).
     self_collision : {"auto", "on", "off"}
@@ -328,6 +328,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     def wall(state, bx, bv):
         """A leg's panels stay on their side of the plane between the legs, below the crotch, as the
         body moves (:func:`~tailor.placement.limb_walls`): inelastic, like a body contact."""
+        if not walls.count:
+            return
         if sim["wall_weld"] is not sim["weld"]:  # welded vertices whose members agree on one wall
             w, nw = sim["weld"], int(sim["weld"].max()) + 1
             lo = np.full(nw, walls.count)
