@@ -10,7 +10,7 @@ from conftest import PANELS, sheet
 from tailor.body import Body
 from tailor.cli import main
 from tailor.collide import BodyCollider, self_intersections
-from tailor.drape import drape
+from tailor.drape import DRAPE_RESOLUTION, drape
 from tailor.geometry import connected_components
 from tailor.io import read_pattern
 from tailor.placement import no_walls
@@ -304,3 +304,12 @@ def test_trousers_stay_up_on_the_walking_mannequin():
             legs = result.mesh.panel_vertices(pattern.panel_index(name))
             low = legs[x[legs, 2] < 0.6]
             assert (sign * x[low, 0] > 0).all()
+
+
+def test_library_and_command_line_drape_share_the_default_resolution():
+    import inspect
+
+    from tailor.cli import build_parser
+
+    args = build_parser().parse_args(["drape", "panels/skirt.json"])
+    assert inspect.signature(drape).parameters["resolution"].default == DRAPE_RESOLUTION == args.resolution * 1e-2
