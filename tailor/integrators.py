@@ -25,7 +25,7 @@ import numpy as np
 from .errors import SimulationUnstable
 from .forces.external import air_damping
 from .forces.jacobian import SparsePattern, jacobian_data
-from .forces.kernels import block_pcg, bsr_matvec
+from .forces.kernels import block_pcg, bsr_matvec, inverse_3x3
 from .model import State
 
 __all__ = ["INTEGRATORS", "make_integrator", "ForwardEuler", "SymplecticEuler", "Verlet", "RK4", "ImplicitEuler", "Contacts"]
@@ -291,7 +291,7 @@ class ImplicitEuler:
             drag = air_damping(model, state, self.wind)
             drag[model.vertex_pinned] = 0.0
             pattern.add_to_diagonal(blocks, dt * drag)
-        system = (pattern.block_indptr, pattern.block_cols, blocks, np.linalg.inv(pattern.diagonal_blocks(blocks)))
+        system = (pattern.block_indptr, pattern.block_cols, blocks, inverse_3x3(pattern.diagonal_blocks(blocks)))
         iterations, converged = self._solve(system, rhs, dv, v, held)
         # Active set, a few passes at most: stuck contacts whose reaction leaves the Coulomb cone
         # slide, and contacts the step would make are held too, so the cloth lands on the body

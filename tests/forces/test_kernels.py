@@ -45,3 +45,14 @@ def test_stiffness_is_symmetric_positive_semidefinite_and_predicts_force_change(
     # the damping force is linear in v: C·v reproduces it exactly
     f_damp = damping_forces(model, state).reshape(-1)
     assert np.allclose(-(c @ state.v.reshape(-1)), f_damp, rtol=1e-10, atol=1e-12 * np.abs(f_damp).max())
+
+
+def test_block_jacobi_inverse_matches_lapack_on_stiff_and_ill_conditioned_blocks():
+    from tailor.forces.kernels import inverse_3x3
+
+    rng = np.random.default_rng(7)
+    a = rng.standard_normal((500, 3, 3))
+    spd = a @ a.transpose(0, 2, 1) + np.eye(3) * np.logspace(-6, 3, 500)[:, None, None]  # mass + Δt²·K
+    inv = inverse_3x3(spd)
+    assert np.allclose(np.einsum("kij,kjl->kil", spd, inv), np.eye(3), atol=1e-6)
+    assert np.allclose(inv, np.linalg.inv(spd), rtol=1e-8, atol=1e-12 * np.abs(np.linalg.inv(spd)).max())
