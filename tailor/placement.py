@@ -201,20 +201,19 @@ class LimbWalls:
         A point of each wall (midway between the two limbs' centres) in the rest pose [m].
     below : (W,)
         Height [m] below which each wall holds in the rest pose (the limb landmark's).
-    own, other : tuple of (K,) int arrays
-        Body vertices round each wall's own limb and its pair at the landmark (empty: the wall
-        does not follow the body).
-    rest : (V, 3) or None
-        The body's rest positions those vertices are measured from.
+    limbs : tuple of ((K,) int, (L,) int)
+        Per wall, the body vertices round its own limb and round the pair at the landmark (empty:
+        the wall does not follow the body).
+    centre : (W, 3) or None
+        Midpoint of those two groups' means in the rest pose [m]; the wall moves as it does.
     """
 
     panel: np.ndarray
     normal: np.ndarray
     point: np.ndarray
     below: np.ndarray
-    own: tuple = ()
-    other: tuple = ()
-    rest: np.ndarray | None = None
+    limbs: tuple = ()
+    centre: np.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -222,7 +221,7 @@ class LimbWalls:
 
     def of(self, mesh) -> np.ndarray:
         """(N,) wall of each vertex of ``mesh`` (a garment mesh of the pattern, possibly cut), −1 for none."""
-        return self.panel[mesh.vertex_panel] if len(self.panel) else np.full(mesh.vertex_count, -1)
+        return self.panel[mesh.vertex_panel]
 
     def at(self, body_x=None, body_v=None):
         """(normals (W, 3), offsets n·p (W,), heights (W,), normal speeds (W,)) with the body at ``body_x``.
@@ -231,14 +230,12 @@ class LimbWalls:
         walking forward carries it along) and keeps its rest orientation.
         """
         point, below, speed = self.point.copy(), self.below.copy(), np.zeros(self.count)
-        if body_x is not None and self.rest is not None:
-            for w, (a, b) in enumerate(zip(self.own, self.other)):
-                shift = 0.5 * (body_x[a].mean(axis=0) - self.rest[a].mean(axis=0)
-                               + body_x[b].mean(axis=0) - self.rest[b].mean(axis=0))
-                point[w] += shift
-                below[w] += shift[2]
-                if body_v is not None:
-                    speed[w] = self.normal[w] @ (0.5 * (body_v[a].mean(axis=0) + body_v[b].mean(axis=0)))
+        if body_x is not None and self.limbs:
+            shift = _midpoints(body_x, self.limbs) - self.centre
+            point += shift
+            below += shift[:, 2]
+            if body_v is not None:
+                speed = np.einsum("ij,ij->i", self.normal, _midpoints(body_v, self.limbs))
         return self.normal, np.einsum("ij,ij->i", self.normal, point), below, speed
 
 
@@ -282,9 +279,13 @@ def limb_walls(pattern, landmarks, body_x=None) -> LimbWalls:
     if body_x is None:
         return LimbWalls(index, normal, point, below)
     body_x = np.asarray(body_x, float)
-    own = tuple(_round_limb(body_x, landmarks[k]) for k in names)
-    other = tuple(_round_limb(body_x, landmarks[walls[k][1][2]]) for k in names)
-    return LimbWalls(index, normal, point, below, own, other, body_x)
+    limbs = tuple((_round_limb(body_x, landmarks[k]), _round_limb(body_x, landmarks[walls[k][1][2]])) for k in names)
+    return LimbWalls(index, normal, point, below, limbs, _midpoints(body_x, limbs))
+
+
+def _midpoints(values, limbs):
+    """(W, 3): per wall, the midpoint of the means of ``values`` over its two limbs' vertices."""
+    return np.array([0.5 * (values[a].mean(axis=0) + values[b].mean(axis=0)) for a, b in limbs])
 
 
 def _round_limb(body_x, landmark, band: float = 0.02):
