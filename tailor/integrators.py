@@ -301,13 +301,20 @@ class ImplicitEuler:
             changed = False
             if len(held):
                 r = self._reactions(system, rhs, dv, held)
-                rn = np.einsum("ij,ij->i", r, held.normals)
+                # a contact the body pulls on (rn < 0) has no friction: it slips, and drags nothing
+                rn = np.maximum(np.einsum("ij,ij->i", r, held.normals), 0.0)
                 tangential = np.linalg.norm(r - rn[:, None] * held.normals, axis=1)
-                slip = (held.stick > 0) & (tangential > held.friction * rn)
+                limit = np.zeros_like(rn)  # μ may be inf (no sliding): never multiplied by rn = 0
+                pressed = rn > 0.0
+                limit[pressed] = held.friction[pressed] * rn[pressed]
+                slip = (held.stick > 0) & (tangential > limit)
                 if slip.any():
                     # a slipping contact keeps the friction it had, at its Coulomb limit (kinetic
-                    # friction inside the solve, so the neighbours feel it)
-                    drag = (held.friction * rn / np.maximum(tangential, 1e-300))[slip, None] * (r - rn[:, None] * held.normals)[slip]
+                    # friction inside the solve, so the neighbours feel it); a tangential reaction
+                    # of round-off size has no direction to drag in
+                    rt = r - rn[:, None] * held.normals
+                    drag = np.where(tangential > 1e-12 * (rn + 1e-30), limit / np.maximum(tangential, 1e-300), 0.0)
+                    drag = drag[slip, None] * rt[slip]
                     np.add.at(rhs.reshape(n, 3), held.ids[slip], drag)
                     held.stick[slip] = 0
                     self.slipped += int(slip.sum())

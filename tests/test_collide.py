@@ -22,3 +22,19 @@ def test_vertices_trapped_deep_inside_are_returned_to_the_surface():
     assert np.all(np.abs(r[:3] - 0.203) < 0.002)  # on the surface, thickness outside
     assert np.allclose(state.v[:3], [0.0, 0.3, 0.0])  # inelastic: moving with the body
     assert np.array_equal(state.x[3:], x[3:]) and np.all(state.v[3:] == 1.0)  # the rest untouched
+
+
+def test_contact_normal_does_not_depend_on_which_equally_close_triangle_comes_first():
+    from tailor.scenes import sphere
+
+    v, f = sphere(0.045)  # mirror-symmetric in x and y, a vertex at the top
+    collider = BodyCollider(v[None], f, margin=0.01)
+    # above the top vertex (six faces share it), inside on the mirror planes (two faces tie)
+    points = np.array([[0.0, 0.0, 0.047], [0.0, 0.0, 0.0435], [0.0, -0.0067, 0.0425], [0.0, 0.0067, 0.0425]])
+    dist, tri, _, normal = collider.nearest(points, v, 0, cache=False)
+    assert np.all(tri >= 0)
+    assert np.allclose(normal[:2], [0.0, 0.0, 1.0], atol=1e-9)
+    assert np.allclose(normal[2:, 0], 0.0, atol=1e-9)  # no sideways tilt
+    assert normal[2, 1] == -normal[3, 1] < 0.0
+    assert abs(dist[0] - 0.002) < 1e-9
+    assert dist[1] < 0.0

@@ -206,11 +206,41 @@ def _closest_barycentric(p, a, b, c):
     return 1.0 - v - w, v, w  # face
 
 
+@njit(cache=True, inline="always")
+def _contact_normal(x, a, b, c, d0, d1, d2, dist2):
+    """(n0, n1, n2, signed distance) of ``x`` to its closest point on triangle abc at offset d.
+
+    The normal is the distance field's gradient: the face normal over the face's inside, the
+    direction from the closest point over an edge or a vertex (so the same whichever face sharing
+    it is asked), signed by the face's side; the face normal for a point on the surface.
+    """
+    e0, e1, e2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    f0, f1, f2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    n0, n1, n2 = e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0
+    nl = max(math.sqrt(n0 * n0 + n1 * n1 + n2 * n2), 1e-300)
+    n0, n1, n2 = n0 / nl, n1 / nl, n2 / nl
+    s = d0 * n0 + d1 * n1 + d2 * n2
+    dl = math.sqrt(dist2)
+    if dl > 1e-9:
+        sg = 1.0 if s >= 0.0 else -1.0
+        return sg * d0 / dl, sg * d1 / dl, sg * d2 / dl, sg * dl
+    return n0, n1, n2, s
+
+
+TIE = 1e-9
+"""Relative difference of squared distances below which two body triangles are equally close."""
+
+
 @njit(cache=True, parallel=True)
 def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal):
+    """Closest body triangle per point; equally close triangles (a point inside a body, on the
+    medial plane between two faces: a cloth dropped on a sphere's top, predicted a step ahead)
+    average their normals, so the push does not depend on the order of the triangles (picking
+    the first tilted a symmetric drop sideways, friction turned that into a drift of the patch)."""
     for i in prange(len(ptr) - 1):
         best = 1e30
         out_tri[i] = -1
+        a0 = a1 = a2 = 0.0
         for k in range(ptr[i], ptr[i + 1]):
             t = tri[k]
             a, b, c = bx[faces[t, 0]], bx[faces[t, 1]], bx[faces[t, 2]]
@@ -219,18 +249,20 @@ def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal):
             d1 = x[i, 1] - (u * a[1] + v * b[1] + w * c[1])
             d2 = x[i, 2] - (u * a[2] + v * b[2] + w * c[2])
             dist2 = d0 * d0 + d1 * d1 + d2 * d2
-            if dist2 < best:
+            if dist2 < best * (1.0 - TIE) - 1e-30:
                 best = dist2
-                e0, e1, e2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-                f0, f1, f2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
-                n0, n1, n2 = e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0
-                nl = max(math.sqrt(n0 * n0 + n1 * n1 + n2 * n2), 1e-300)
-                n0, n1, n2 = n0 / nl, n1 / nl, n2 / nl
-                s = d0 * n0 + d1 * n1 + d2 * n2
+                n0, n1, n2, s = _contact_normal(x[i], a, b, c, d0, d1, d2, dist2)
+                a0, a1, a2 = n0, n1, n2
                 out_dist[i] = 0.0 if abs(s) < 1e-12 else s
                 out_tri[i] = t
                 out_bary[i, 0], out_bary[i, 1], out_bary[i, 2] = u, v, w
                 out_normal[i, 0], out_normal[i, 1], out_normal[i, 2] = n0, n1, n2
+            elif dist2 <= best * (1.0 + TIE) + 1e-30:
+                n0, n1, n2, s = _contact_normal(x[i], a, b, c, d0, d1, d2, dist2)
+                a0, a1, a2 = a0 + n0, a1 + n1, a2 + n2
+        al = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        if out_tri[i] >= 0 and al > 1e-6:
+            out_normal[i, 0], out_normal[i, 1], out_normal[i, 2] = a0 / al, a1 / al, a2 / al
 
 
 class BodyCollider:
