@@ -218,6 +218,7 @@ class ImplicitEuler:
         self.contact_passes = 4
         self.predicted = 0  # contacts added by prediction, and stuck ones that slipped, over all steps
         self.slipped = 0
+        self.released = 0  # held contacts the body would have had to pull on, let go within the step
         self.contact_stuck = np.zeros(0, bool)
         self.wind = None  # the air velocity the forces blow with: drag is implicit relative to it
 
@@ -293,16 +294,28 @@ class ImplicitEuler:
             pattern.add_to_diagonal(blocks, dt * drag)
         system = (pattern.block_indptr, pattern.block_cols, blocks, inverse_3x3(pattern.diagonal_blocks(blocks)))
         iterations, converged = self._solve(system, rhs, dv, v, held)
-        # Active set, a few passes at most: stuck contacts whose reaction leaves the Coulomb cone
-        # slide, and contacts the step would make are held too, so the cloth lands on the body
-        # within the step instead of being pushed out after it. (Contacts the body pulls on are
-        # released by the collider before the next step.)
+        # Active set, a few passes at most: contacts the body would have to pull on are let go,
+        # stuck contacts whose reaction leaves the Coulomb cone slide, and contacts the step would
+        # make are held too, so the cloth lands on the body within the step instead of being
+        # pushed out after it.
         for _ in range(self.contact_passes if converged else 0):
             changed = False
             if len(held):
                 r = self._reactions(system, rhs, dv, held)
-                # a contact the body pulls on (rn < 0) has no friction: it slips, and drags nothing
-                rn = np.maximum(np.einsum("ij,ij->i", r, held.normals), 0.0)
+                rn = np.einsum("ij,ij->i", r, held.normals)
+                pulled = rn < 0.0
+                if pulled.any():
+                    # the body would have to pull this contact to hold it: let it go (the cloth
+                    # leaves the body here), and solve again before judging friction
+                    held = held.take(~pulled)
+                    self.released += int(pulled.sum())
+                    extra, converged = self._solve(system, rhs, dv, v, held)
+                    iterations += extra
+                    if not converged:
+                        break
+                    r = self._reactions(system, rhs, dv, held)
+                    rn = np.einsum("ij,ij->i", r, held.normals)
+                rn = np.maximum(rn, 0.0)  # a contact the new solve pulls on is let go next pass
                 tangential = np.linalg.norm(r - rn[:, None] * held.normals, axis=1)
                 limit = np.zeros_like(rn)  # μ may be inf (no sliding): never multiplied by rn = 0
                 pressed = rn > 0.0

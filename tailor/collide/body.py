@@ -15,7 +15,7 @@ from numba import njit, prange
 
 from ..errors import SimulationUnstable
 
-__all__ = ["bvh_object", "manager_contacts", "sphere_query", "self_intersections", "points_inside", "BodyCollider"]
+__all__ = ["bvh_object", "manager_contacts", "sphere_query", "clustered_query", "TriangleBoxes", "self_intersections", "points_inside", "BodyCollider"]
 
 _NO_CONTACTS = (np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0, bool), np.zeros((0, 3)), np.zeros(0))
 
@@ -89,6 +89,121 @@ def sphere_query(points, radius, target, *, per_point: float = 64.0):
             point.append(i)
             tri.append(contact.b2)
     return np.asarray(point, np.int64), np.asarray(tri, np.int64)
+
+
+def _cluster(points, cell):
+    """(order, ptr, lo, hi): points binned into cubes of side ``cell``, as CSR over the occupied cubes."""
+    key = np.floor(points / cell).astype(np.int64)
+    _, cluster, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    order = np.argsort(cluster.ravel(), kind="stable")
+    ptr = np.concatenate([[0], np.cumsum(counts)])
+    return order, ptr, np.minimum.reduceat(points[order], ptr[:-1], axis=0), np.maximum.reduceat(points[order], ptr[:-1], axis=0)
+
+
+def _box_manager(lo, hi):
+    """(FCL dynamic AABB tree over boxes [lo, hi], map id(geometry) → box index)."""
+    geoms = [fcl.Box(*np.maximum(h - l, 1e-9)) for l, h in zip(lo, hi)]
+    manager = fcl.DynamicAABBTreeCollisionManager()
+    manager.registerObjects([fcl.CollisionObject(g, fcl.Transform(0.5 * (l + h))) for g, l, h in zip(geoms, lo, hi)])
+    manager.setup()
+    return manager, {id(g): i for i, g in enumerate(geoms)}
+
+
+BOX_CELL = 0.06
+"""Side [m] of the cubes :func:`clustered_query` bins points and triangles into."""
+
+
+class TriangleBoxes:
+    """A triangle mesh's triangles binned by centroid into cubes of side ``cell``, one FCL box each.
+
+    The target side of :func:`clustered_query`: per triangle its bounding box, per cube the box
+    round its triangles, in an FCL dynamic AABB tree. Build one per body frame (or cloth state).
+    """
+
+    def __init__(self, vertices, faces, cell: float = 0.06):
+        vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+        faces = np.ascontiguousarray(faces, dtype=np.int64)
+        corners = vertices[faces]
+        self.corners = np.ascontiguousarray(corners)
+        self.lo, self.hi = corners.min(axis=1), corners.max(axis=1)
+        self.order, self.ptr, _, _ = _cluster(corners.mean(axis=1), cell) if len(faces) else (
+            np.zeros(0, np.int64), np.zeros(1, np.int64), None, None)
+        self.order = self.order.astype(np.int64)
+        if len(faces):
+            self.manager, self.index = _box_manager(np.minimum.reduceat(self.lo[self.order], self.ptr[:-1], axis=0),
+                                                    np.maximum.reduceat(self.hi[self.order], self.ptr[:-1], axis=0))
+
+    def __len__(self):
+        return len(self.lo)
+
+
+def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = 0.06):
+    """(point, triangle) index pairs of ``target``'s triangles within ``radius`` of each point (FCL, by clusters).
+
+    The FCL broad phase by clusters on both sides. python-fcl builds one Python object per
+    contact pair (≈ 6 µs), and asking once per point against a triangle hierarchy
+    (:func:`sphere_query`) pays for every (point, triangle) pair, though neighbouring points
+    share most of their triangles (a 2 cm sphere round a cloth vertex meets ~23 triangles of the
+    mannequin). Here the points are binned into cubes of side ``cell``; FCL's dynamic AABB trees
+    collide the points' boxes grown by ``radius`` with ``target``'s boxes, and a compiled pass
+    hands each triangle of a met box to the points of the other whose sphere meets the triangle
+    itself: the same pairs as :func:`sphere_query` (2 894 points 5 mm off the mannequin within
+    2 cm: 67.0 k pairs in 35–70 ms against 350 ms, and 25 ms to build the boxes against 58 ms
+    for the hierarchy; 6 cm cubes).
+    """
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    if not len(points) or not len(target):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    p_order, p_ptr, p_lo, p_hi = _cluster(points, cell)
+    mine, mine_index = _box_manager(p_lo - radius, p_hi + radius)
+    theirs, their_index = target.manager, target.index
+    limit = 64 * len(p_lo) + 1000
+    while True:
+        data = fcl.CollisionData(request=fcl.CollisionRequest(num_max_contacts=limit, enable_contact=False))
+        mine.collide(theirs, data, fcl.defaultCollisionCallback)
+        if len(data.result.contacts) < limit:
+            break
+        limit *= 4
+    contacts = data.result.contacts
+    pairs = np.empty((len(contacts), 2), np.int64)
+    for k, c in enumerate(contacts):
+        a = mine_index.get(id(c.o1))
+        pairs[k] = (a, their_index[id(c.o2)]) if a is not None else (mine_index[id(c.o2)], their_index[id(c.o1)])
+    return _expand_boxes(pairs, p_ptr, p_order.astype(np.int64), target.ptr, target.order, points, target.lo, target.hi,
+                         target.corners, float(radius))
+
+
+@njit(cache=True)
+def _expand_boxes(pairs, p_ptr, p_order, t_ptr, t_order, points, tri_lo, tri_hi, corners, radius):
+    r2 = radius * radius
+    count = 0
+    out_p, out_t = np.empty(0, np.int64), np.empty(0, np.int64)
+    for pas in range(2):
+        if pas == 1:
+            out_p, out_t = np.empty(count, np.int64), np.empty(count, np.int64)
+            count = 0
+        for k in range(len(pairs)):
+            for m in range(t_ptr[pairs[k, 1]], t_ptr[pairs[k, 1] + 1]):
+                t = t_order[m]
+                for q in range(p_ptr[pairs[k, 0]], p_ptr[pairs[k, 0] + 1]):
+                    p = p_order[q]
+                    d2 = 0.0
+                    for a in range(3):
+                        g = max(tri_lo[t, a] - points[p, a], 0.0, points[p, a] - tri_hi[t, a])
+                        d2 += g * g
+                    if d2 > r2:  # the bounding box is out of reach: so is the triangle
+                        continue
+                    a, b, c = corners[t, 0], corners[t, 1], corners[t, 2]
+                    u, v, w = _closest_barycentric(points[p], a, b, c)
+                    d2 = 0.0
+                    for e in range(3):
+                        g = points[p, e] - (u * a[e] + v * b[e] + w * c[e])
+                        d2 += g * g
+                    if d2 <= r2:
+                        if pas == 1:
+                            out_p[count], out_t[count] = p, t
+                        count += 1
+    return out_p, out_t
 
 
 @njit(cache=True)
@@ -268,8 +383,9 @@ def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal):
 class BodyCollider:
     """Cloth–body contact (Carignan Eq. 9–14) with FCL as the broad phase.
 
-    FCL collides a sphere of radius ``margin`` around every cloth vertex with the body's
-    bounding-volume hierarchy and returns the body triangles near each vertex. Those candidates
+    FCL finds the body triangles within ``margin`` of every cloth vertex, by clusters: boxes
+    round nearby cloth vertices against boxes round nearby body triangles
+    (:func:`clustered_query`, built once per body frame). Those candidates
     are kept while no cloth vertex has moved more than half the margin and the body frame is the
     same; each step a compiled narrow phase finds, on the body as it is at that instant, the
     closest point, its barycentric coordinates and the outward normal.
@@ -285,7 +401,7 @@ class BodyCollider:
         self.frames = np.asarray(frames, float)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.margin = float(margin)
-        self._bvh = {}
+        self._bvh = {}  # body frame → its TriangleBoxes
         self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle)
         self._previous = None  # signed distance of every vertex after the last response
         self.contact_set = _NO_CONTACTS
@@ -300,7 +416,7 @@ class BodyCollider:
 
     def _body(self, frame):
         if frame not in self._bvh:
-            self._bvh[frame] = bvh_object(self.frames[frame], self.faces)
+            self._bvh[frame] = TriangleBoxes(self.frames[frame], self.faces, BOX_CELL)
         return self._bvh[frame]
 
     def candidates(self, x, frame: int, *, cache: bool = True):
@@ -347,8 +463,7 @@ class BodyCollider:
     def _query(self, points, frame, ids, radius=None):
         """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of ``points``."""
         radius = self.margin if radius is None else radius
-        per_point = 64 * max(1.0, (radius / self.margin) ** 2)  # triangles per sphere grow with r²
-        point, tri = sphere_query(points, radius, self._body(frame), per_point=per_point)
+        point, tri = clustered_query(points, radius, self._body(frame), cell=BOX_CELL)
         self.queries += 1
         self.queried_points += len(points)
         keys = np.asarray(ids, np.int64)[point] * len(self.faces) + tri

@@ -9,8 +9,10 @@ threshold distance from the cloth's vertices") runs in three stages:
    or if it (or it with a nearby patch) is folded: a surface whose normals all lie within 60° of
    one direction is a height field over it and cannot come near itself except through its own
    neighbourhood (Volino & Magnenat-Thalmann's normal-cone argument). Flat cloth is skipped.
-2. **Broad phase**: a sphere of radius ``thickness + reach`` around every active vertex is
-   collided (FCL) with a hierarchy over the active triangles (rebuilt: python-fcl cannot refit).
+2. **Broad phase**: the active triangles within ``thickness + reach`` of every active vertex,
+   found by FCL between boxes round clusters of vertices and boxes round clusters of triangles
+   (:func:`~tailor.collide.body.clustered_query`, rebuilt each query: python-fcl cannot refit;
+   one Python object per cluster pair instead of per vertex–triangle pair).
    ``reach`` is ``margin`` plus twice the last step's largest relative displacement (a pair that
    crossed in it lies no deeper). The candidates stay valid while no vertex has moved more than
    ``reach / 2`` relative to the cloth's centroid since the query (two points then approach by
@@ -62,7 +64,7 @@ import scipy.sparse as sp
 from numba import njit, prange
 
 from ..errors import SimulationUnstable
-from .body import bvh_object, manager_contacts, sphere_query
+from .body import BOX_CELL, TriangleBoxes, clustered_query, manager_contacts
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
@@ -476,8 +478,8 @@ class SelfCollider:
         self._ee_near = np.zeros(0, bool)
         if len(faces):
             verts = np.unique(self.faces[faces])
-            target = bvh_object(x, self.faces[faces])
-            point, local = sphere_query(x[verts], self.thickness + self._reach, target, per_point=24.0)
+            target = TriangleBoxes(x, self.faces[faces], BOX_CELL)
+            point, local = clustered_query(x[verts], self.thickness + self._reach, target, cell=BOX_CELL)
             vertex, tri = verts[point], faces[local]
             # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
             # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
