@@ -38,3 +38,19 @@ def test_contact_normal_does_not_depend_on_which_equally_close_triangle_comes_fi
     assert normal[2, 1] == -normal[3, 1] < 0.0
     assert abs(dist[0] - 0.002) < 1e-9
     assert dist[1] < 0.0
+
+
+def test_clustered_query_finds_exactly_the_pairs_of_one_sphere_per_point():
+    from tailor.collide import TriangleBoxes, bvh_object, clustered_query, sphere_query
+
+    body = trimesh.creation.capsule(height=0.3, radius=0.08).subdivide()
+    rng = np.random.default_rng(3)
+    # points round the surface at up to 3 cm, a few far away, and a dense patch (clusters of many)
+    pts, _ = trimesh.sample.sample_surface(body, 600, seed=3)
+    pts = np.concatenate([pts + rng.normal(0.0, 0.015, pts.shape), rng.uniform(-1, 1, (20, 3)),
+                          [0.0, 0.0, 0.24] + rng.uniform(-0.02, 0.02, (200, 3))])
+    for radius, cell in ((0.02, 0.06), (0.005, 0.02), (0.05, 0.1)):
+        a = sphere_query(pts, radius, bvh_object(body.vertices, body.faces))
+        b = clustered_query(pts, radius, TriangleBoxes(body.vertices, body.faces, cell), cell=cell)
+        assert len(a[0]) > len(pts)
+        assert set(zip(*a)) == set(zip(*b))
