@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .bench import rest_error
+from .errors import SimulationUnstable
 from .fabric import PRESETS, Fabric, preset
 from .mesh import discretise
 from .model import build_model
@@ -194,9 +195,15 @@ def cusick(fabric: Fabric, *, resolution: float = 0.01, duration: float = 3.0) -
                         time.perf_counter() - t0)
 
 
+def _mm(a, b):
+    """Bottino's metric between two runs [mm]; NaN if either stopped."""
+    return math.nan if a is None or b is None else _shape_distance(a[:2], b[:2]) * 1e3
+
+
 def _table(title, labels, matrix, fmt="{:.1f}") -> str:
     head = "| " + title + " | " + " | ".join(labels) + " |\n|---|" + "---|" * len(labels) + "\n"
-    return head + "".join("| " + a + " | " + " | ".join("" if v is None else fmt.format(v) for v in row) + " |\n"
+    return head + "".join("| " + a + " | " + " | ".join("" if v is None else "—" if v != v else fmt.format(v) for v in row)
+                          + " |\n"
                           for a, row in zip(labels, matrix))
 
 
@@ -219,9 +226,14 @@ def validate(out, *, quick: bool = False, progress=None) -> Path:
     total = len(jobs) + len(cusick_fabrics)
     runs, done = {}, 0
     t_all = time.perf_counter()
+    failed = []
     for key in jobs:
         scene, fab, model, n, mesh_kind = key
-        runs[key] = _run_patch(scene, bottino_fabric(fab, model), n, mesh_kind, duration)
+        try:
+            runs[key] = _run_patch(scene, bottino_fabric(fab, model), n, mesh_kind, duration)
+        except SimulationUnstable as exc:  # one case must not cost the report: it says so instead
+            runs[key] = None
+            failed.append(f"{scene}, fabric {fab}, {model}, n = {n} ({mesh_kind}): {exc}")
         done += 1
         if progress:
             progress(done, total, f"{scene} {fab} {model} n={n} {mesh_kind}")
@@ -235,22 +247,21 @@ def validate(out, *, quick: bool = False, progress=None) -> Path:
         for fab in fabrics:
             labels = [str(n) for n in sizes]
             for model in models:
-                m = [[None if i == j else _shape_distance(runs[(scene, fab, model, a, "grid")][:2],
-                                                          runs[(scene, fab, model, b, "grid")][:2]) * 1e3
+                m = [[None if i == j else _mm(runs[(scene, fab, model, a, "grid")], runs[(scene, fab, model, b, "grid")])
                       for j, b in enumerate(sizes)] for i, a in enumerate(sizes)]
                 lines.append(f"\nFabric {fab}, {model}: grid resolution against resolution (mm)\n\n")
                 lines.append(_table("n", labels, m))
             n = sizes[-1]
-            m = [[None if i == j else _shape_distance(runs[(scene, fab, a, n, "grid")][:2],
-                                                      runs[(scene, fab, b, n, "grid")][:2]) * 1e3
+            m = [[None if i == j else _mm(runs[(scene, fab, a, n, "grid")], runs[(scene, fab, b, n, "grid")])
                   for j, b in enumerate(models)] for i, a in enumerate(models)]
             lines.append(f"\nFabric {fab}, n = {n}: model against model (mm)\n\n")
             lines.append(_table("model", list(models), m))
             if scene == scenes[0]:
-                tri = [_shape_distance(runs[(scene, fab, "kes5", k, "grid")][:2],
-                                       runs[(scene, fab, "kes5", k, "triangle")][:2]) * 1e3 for k in sizes]
+                tri = [_mm(runs[(scene, fab, "kes5", k, "grid")], runs[(scene, fab, "kes5", k, "triangle")]) for k in sizes]
                 lines.append(f"\nFabric {fab}, kes5: grid against Triangle mesh of the same size (mm): "
-                             + ", ".join(f"n = {k}: {v:.1f}" for k, v in zip(sizes, tri)) + "\n")
+                             + ", ".join(f"n = {k}: " + ("—" if v != v else f"{v:.1f}") for k, v in zip(sizes, tri)) + "\n")
+            if runs[(scene, fab, "kes5", n, "grid")] is None:
+                continue
             mesh, x, _ = runs[(scene, fab, "kes5", n, "grid")]
             meshes = [(x, mesh.faces, (0.8, 0.3, 0.3))]
             if scene != "hang":
@@ -260,7 +271,7 @@ def validate(out, *, quick: bool = False, progress=None) -> Path:
                 sag = (x[:, 2].max() - x[:, 2].min()) * 1e3
                 lines.append(f"\nFabric {fab}: height of the hanging patch {sag:.1f} mm at n = {n}; by resolution: "
                              + ", ".join(f"{k}: {np.ptp(runs[(scene, fab, 'kes5', k, 'grid')][1][:, 2]) * 1e3:.1f}"
-                                         for k in sizes) + "\n")
+                                         for k in sizes if runs[(scene, fab, 'kes5', k, 'grid')] is not None) + "\n")
             pic = out / f"validation_{scene}_{fab}.png"
             render_views(pic, meshes, size=(6, 3), title=f"{scene}, fabric {fab}, n = {n}")
             pictures.append(pic)
@@ -270,15 +281,24 @@ def validate(out, *, quick: bool = False, progress=None) -> Path:
                  "DC = (shadow − disk) / (specimen − disk).\n\n| fabric | bending c | DC | nodes | wall s |\n|---|---|---|---|---|\n")
     results = []
     for name in cusick_fabrics:
-        r = cusick(preset(name), resolution=0.02 if quick else 0.01, duration=cusick_s)
+        try:
+            r = cusick(preset(name), resolution=0.02 if quick else 0.01, duration=cusick_s)
+        except SimulationUnstable as exc:
+            failed.append(f"Cusick, {name}: {exc}")
+            lines.append(f"| {name} | {preset(name).bending:g} | unstable | | |\n")
+            continue
+        finally:
+            done += 1
+            if progress:
+                progress(done, total, f"cusick {name}")
         results.append(r)
-        done += 1
-        if progress:
-            progress(done, total, f"cusick {name}")
         lines.append(f"| {name} | {preset(name).bending:g} | {r.drape_coefficient:.3f} | {r.nodes} | {r.wall_s:.1f} |\n")
     pic = out / "validation_cusick.png"
     shadow_plot(pic, results)
     lines.append(f"\n![drape shadows]({pic.name})\n")
+    if failed:
+        lines.append("\n## Runs that stopped\n\nEach stopped with `SimulationUnstable` (its table cells read —):\n\n"
+                     + "".join(f"- {f}\n" for f in failed))
     lines.append(f"\nTotal wall time {time.perf_counter() - t_all:.0f} s.\n")
     report = out / "validation.md"
     write_text_atomic(report, "".join(lines))

@@ -64,3 +64,31 @@ def test_drape_coefficient_and_nodes_of_known_shapes():
     wavy = x.copy()
     wavy[65:, :2] *= (1 + 0.1 * np.cos(6 * t))[:, None]
     assert count_nodes(wavy, np.arange(65, 129)) == 6
+
+
+def test_a_run_that_stops_is_reported_and_does_not_cost_the_report(tmp_path, monkeypatch):
+    import tailor.validate as V
+    from tailor.errors import SimulationUnstable
+    from tailor.scenes import grid
+
+    def fake_run(scene, fabric, n, mesh="grid", duration=2.0):
+        if "automatic" in fabric.name and n == 21 and scene == "sphere":
+            raise SimulationUnstable("simulation unstable at t = 0.04 s")
+        m = grid(0.2, 0.2, n)
+        return m, np.c_[m.uv, np.full(len(m.uv), 0.05)], 0.0
+
+    def fake_cusick(fabric, **kw):
+        if fabric.name == "silk":
+            raise SimulationUnstable("simulation unstable at t = 1 s")
+        m = grid(0.3, 0.3, 5)
+        x = np.c_[m.uv - 0.15, np.zeros(len(m.uv))]
+        dc, shadow = drape_coefficient(x, m.faces)
+        return V.CusickResult(fabric.name, dc, 0, shadow, x, m.faces)
+
+    monkeypatch.setattr(V, "_run_patch", fake_run)
+    monkeypatch.setattr(V, "cusick", fake_cusick)
+    text = V.validate(tmp_path, quick=True).read_text()
+    assert "## Runs that stopped" in text
+    assert "sphere, fabric A, auto, n = 21 (grid): simulation unstable" in text and "Cusick, silk" in text
+    assert "| 11 |  | — |" in text  # the auto table's missing cell
+    assert "| silk | 1 | unstable |" in text and "| cotton |" in text
