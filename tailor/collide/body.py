@@ -401,7 +401,7 @@ class BodyCollider:
         self.frames = np.asarray(frames, float)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.margin = float(margin)
-        self._bvh = {}  # body frame → its TriangleBoxes
+        self._boxes = {}  # body frame → its TriangleBoxes
         self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle)
         self._previous = None  # signed distance of every vertex after the last response
         self.contact_set = _NO_CONTACTS
@@ -415,9 +415,11 @@ class BodyCollider:
         self.contact_set = _NO_CONTACTS
 
     def _body(self, frame):
-        if frame not in self._bvh:
-            self._bvh[frame] = TriangleBoxes(self.frames[frame], self.faces, BOX_CELL)
-        return self._bvh[frame]
+        if frame not in self._boxes:
+            if len(self._boxes) >= 2:  # a walk moves on frame by frame: keep the last two, not all
+                self._boxes.pop(next(iter(self._boxes)))
+            self._boxes[frame] = TriangleBoxes(self.frames[frame], self.faces, BOX_CELL)
+        return self._boxes[frame]
 
     def candidates(self, x, frame: int, *, cache: bool = True):
         """CSR (ptr, tri) of body triangles within ``margin`` of each vertex (FCL broad phase).
