@@ -229,6 +229,7 @@ def _garment_sweep(scene: GarmentScene, quick: bool, progress, start: int, total
             run.stable, run.note = False, str(exc).split(":")[0]
         else:
             run.final, run.uv = x, uv
+            run.steps, run.cg_iterations = report.get("steps", 0), report.get("cg_iterations", 0)
             run.eq24_multiple = preset_q.step / report["time_step_eq24_s"]
             if k == 0:
                 ref = (uv, x, panel)

@@ -580,6 +580,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     report["self_intersections_per_frame"] = crossings  # intersecting triangle pairs (none sharing a vertex)
     report["wall_s"] = time.perf_counter() - t_start
     report["steps"] = sim["steps"]
+    report["cg_iterations"] = int(getattr(integ, "total_iterations", 0))
     report["body_bvh_queries"] = collider.queries
     report["max_contact_correction_m"] = deepest[0]  # deepest penetration any step had to undo
     report["vertices_rescued_from_inside_body"] = sim["rescued"]
