@@ -15,7 +15,7 @@ from numba import njit, prange
 
 from ..errors import SimulationUnstable
 
-__all__ = ["bvh_object", "manager_contacts", "sphere_query", "clustered_query", "TriangleBoxes", "self_intersections", "points_inside", "BodyCollider"]
+__all__ = ["bvh_object", "boxes", "manager_contacts", "sphere_query", "clustered_query", "TriangleBoxes", "self_intersections", "points_inside", "BodyCollider"]
 
 _NO_CONTACTS = (np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0, bool), np.zeros((0, 3)), np.zeros(0))
 
@@ -53,7 +53,8 @@ def self_intersections(vertices, faces) -> np.ndarray:
 def manager_contacts(geoms, transforms, target=None, *, limit: int):
     """Contacts of FCL objects ``geoms`` at ``transforms`` with ``target`` (or among themselves).
 
-    Returns the contacts and a map ``id(geometry) → index``. Contacts are requested without
+    ``target`` may be a collision object or another manager. Returns the contacts and a map
+    ``id(geometry) → index`` of ``geoms``. Contacts are requested without
     geometry (``enable_contact=False``); python-fcl still builds one Python object per pair,
     which is the dominant cost (≈ 6 µs a pair here). FCL stops silently at ``num_max_contacts``,
     so a full answer is asked again with four times the room.
@@ -100,13 +101,10 @@ def _cluster(points, cell):
     return order, ptr, np.minimum.reduceat(points[order], ptr[:-1], axis=0), np.maximum.reduceat(points[order], ptr[:-1], axis=0)
 
 
-def _box_manager(lo, hi):
-    """(FCL dynamic AABB tree over boxes [lo, hi], map id(geometry) → box index)."""
-    geoms = [fcl.Box(*np.maximum(h - l, 1e-9)) for l, h in zip(lo, hi)]
-    manager = fcl.DynamicAABBTreeCollisionManager()
-    manager.registerObjects([fcl.CollisionObject(g, fcl.Transform(0.5 * (l + h))) for g, l, h in zip(geoms, lo, hi)])
-    manager.setup()
-    return manager, {id(g): i for i, g in enumerate(geoms)}
+def boxes(lo, hi):
+    """FCL box geometries [lo, hi] (rows of corners) and their transforms."""
+    return ([fcl.Box(*np.maximum(h - l, 1e-9)) for l, h in zip(lo, hi)],
+            [fcl.Transform(0.5 * (l + h)) for l, h in zip(lo, hi)])
 
 
 BOX_CELL = 0.06
@@ -121,17 +119,20 @@ class TriangleBoxes:
     """
 
     def __init__(self, vertices, faces, cell: float = 0.06):
-        vertices = np.ascontiguousarray(vertices, dtype=np.float64)
-        faces = np.ascontiguousarray(faces, dtype=np.int64)
-        corners = vertices[faces]
-        self.corners = np.ascontiguousarray(corners)
-        self.lo, self.hi = corners.min(axis=1), corners.max(axis=1)
-        self.order, self.ptr, _, _ = _cluster(corners.mean(axis=1), cell) if len(faces) else (
-            np.zeros(0, np.int64), np.zeros(1, np.int64), None, None)
-        self.order = self.order.astype(np.int64)
-        if len(faces):
-            self.manager, self.index = _box_manager(np.minimum.reduceat(self.lo[self.order], self.ptr[:-1], axis=0),
-                                                    np.maximum.reduceat(self.hi[self.order], self.ptr[:-1], axis=0))
+        corners = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)])
+        self.corners, self.lo, self.hi = corners, corners.min(axis=1), corners.max(axis=1)
+        self.order, self.ptr = np.zeros(0, np.int64), np.zeros(1, np.int64)
+        self.manager, self.index = None, {}
+        if not len(corners):
+            return
+        order, self.ptr, _, _ = _cluster(corners.mean(axis=1), cell)
+        self.order = order.astype(np.int64)
+        geoms, transforms = boxes(np.minimum.reduceat(self.lo[self.order], self.ptr[:-1], axis=0),
+                                  np.maximum.reduceat(self.hi[self.order], self.ptr[:-1], axis=0))
+        self.manager = fcl.DynamicAABBTreeCollisionManager()
+        self.manager.registerObjects([fcl.CollisionObject(g, t) for g, t in zip(geoms, transforms)])
+        self.manager.setup()
+        self.index = {id(g): i for i, g in enumerate(geoms)}
 
     def __len__(self):
         return len(self.lo)
@@ -155,20 +156,12 @@ def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = 0.06
     if not len(points) or not len(target):
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     p_order, p_ptr, p_lo, p_hi = _cluster(points, cell)
-    mine, mine_index = _box_manager(p_lo - radius, p_hi + radius)
-    theirs, their_index = target.manager, target.index
-    limit = 64 * len(p_lo) + 1000
-    while True:
-        data = fcl.CollisionData(request=fcl.CollisionRequest(num_max_contacts=limit, enable_contact=False))
-        mine.collide(theirs, data, fcl.defaultCollisionCallback)
-        if len(data.result.contacts) < limit:
-            break
-        limit *= 4
-    contacts = data.result.contacts
+    contacts, mine = manager_contacts(*boxes(p_lo - radius, p_hi + radius), target.manager, limit=64 * len(p_lo) + 1000)
+    theirs = target.index
     pairs = np.empty((len(contacts), 2), np.int64)
     for k, c in enumerate(contacts):
-        a = mine_index.get(id(c.o1))
-        pairs[k] = (a, their_index[id(c.o2)]) if a is not None else (mine_index[id(c.o2)], their_index[id(c.o1)])
+        a = mine.get(id(c.o1))
+        pairs[k] = (a, theirs[id(c.o2)]) if a is not None else (mine[id(c.o2)], theirs[id(c.o1)])
     return _expand_boxes(pairs, p_ptr, p_order.astype(np.int64), target.ptr, target.order, points, target.lo, target.hi,
                          target.corners, float(radius))
 

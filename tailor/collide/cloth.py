@@ -58,13 +58,12 @@ from __future__ import annotations
 import math
 import time
 
-import fcl
 import numpy as np
 import scipy.sparse as sp
 from numba import njit, prange
 
 from ..errors import SimulationUnstable
-from .body import BOX_CELL, TriangleBoxes, clustered_query, manager_contacts
+from .body import BOX_CELL, TriangleBoxes, boxes, clustered_query, manager_contacts
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
@@ -448,9 +447,7 @@ class SelfCollider:
     @staticmethod
     def _overlapping_boxes(lo, hi):
         """Pairs (i < j) of boxes that overlap, by FCL's dynamic AABB tree."""
-        contacts, index = manager_contacts([fcl.Box(*np.maximum(h - l, 1e-9)) for l, h in zip(lo, hi)],
-                                           [fcl.Transform(0.5 * (l + h)) for l, h in zip(lo, hi)],
-                                           limit=64 * len(lo) + 100)
+        contacts, index = manager_contacts(*boxes(lo, hi), limit=64 * len(lo) + 100)
         pairs = np.array([(index[id(c.o1)], index[id(c.o2)]) for c in contacts], np.int64).reshape(-1, 2)
         pairs = np.unique(np.sort(pairs, axis=1), axis=0)
         pairs = pairs[pairs[:, 0] != pairs[:, 1]]
