@@ -396,12 +396,21 @@ def _cmd_batch(args) -> int:
     return 0
 
 
+def _models(text: str) -> tuple:
+    """``--models``: comma-separated Bottino fabric models."""
+    models = tuple(m.strip() for m in text.split(",") if m.strip())
+    bad = [m for m in models if m not in ("kes5", "kes1", "auto")]
+    if bad or not models:
+        raise argparse.ArgumentTypeError(f"unknown model {bad[0] if bad else text!r}; choose among kes5, kes1, auto")
+    return models
+
+
 def _cmd_validate(args) -> int:
     from .validate import validate
 
     bar, update = _bar("validate", "run", args.quiet)
     with bar:
-        report = validate(args.out, quick=args.quick, progress=update)
+        report = validate(args.out, quick=args.quick, progress=update, models=args.models)
     print(f"wrote {report}")
     return 0
 
@@ -589,6 +598,8 @@ def build_parser() -> argparse.ArgumentParser:
     va = sub.add_parser("validate", help="Bottino's drape experiments and the Cusick drape test: a markdown report")
     va.add_argument("--quick", action="store_true", help="sphere and hanging scenes of fabric A, coarse, 3 Cusick fabrics")
     va.add_argument("--out", default="out/validation", metavar="DIR", help="output folder (default out/validation)")
+    va.add_argument("--models", metavar="LIST", type=_models, help="comma-separated fabric models of Bottino's scenes among kes5, kes1, "
+                    "auto (default: all three; with --quick kes5,auto)")
     va.set_defaults(func=_cmd_validate)
 
     be = sub.add_parser("bench", help="measure speed versus accuracy (or stability at the extremes)")

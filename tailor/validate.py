@@ -207,7 +207,7 @@ def _table(title, labels, matrix, fmt="{:.1f}") -> str:
                           for a, row in zip(labels, matrix))
 
 
-def validate(out, *, quick: bool = False, progress=None) -> Path:
+def validate(out, *, quick: bool = False, progress=None, models=None) -> Path:
     """Run the validation scenes and write ``out/validation.md`` and its pictures; returns the report path."""
     from .io.atomic import write_text_atomic
     from .io.plots import shadow_plot
@@ -218,7 +218,9 @@ def validate(out, *, quick: bool = False, progress=None) -> Path:
     sizes = (11, 21) if quick else (11, 21, 31)
     scenes = ("sphere", "hang") if quick else ("sphere", "cube80", "cube128", "cube55", "hang")
     fabrics = ("A",) if quick else ("A", "B")
-    models = ("kes5", "auto") if quick else ("kes5", "kes1", "auto")
+    models = (("kes5", "auto") if quick else ("kes5", "kes1", "auto")) if models is None else tuple(models)
+    for m in models:
+        bottino_fabric("A", m)  # an unknown model is an error before anything runs
     duration = 1.2 if quick else 2.0
     jobs = [(s, f, mo, n, "grid") for s in scenes for f in fabrics for mo in models for n in sizes]
     jobs += [(s, f, "kes5", n, "triangle") for s in scenes[:1] for f in fabrics for n in sizes]

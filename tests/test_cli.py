@@ -63,3 +63,11 @@ def test_garmentcode_patterns_check_and_mesh(garmentcode_dir, tmp_path):
     for f in sorted(garmentcode_dir.glob("*_specification.json")):
         assert main(["check", str(f)]) == 0
         assert main(["mesh", str(f), "--out", str(tmp_path / f"{f.stem}.obj")]) == 0
+
+
+def test_validate_rejects_an_unknown_fabric_model_before_running(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["validate", "--models", "kes5,kes3", "--out", str(tmp_path / "v")])
+    assert exc.value.code == 2
+    assert "unknown model 'kes3'" in capsys.readouterr().err
+    assert not (tmp_path / "v").exists()
