@@ -218,7 +218,8 @@ def validate(out, *, quick: bool = False, progress=None, models=None) -> Path:
     sizes = (11, 21) if quick else (11, 21, 31)
     scenes = ("sphere", "hang") if quick else ("sphere", "cube80", "cube128", "cube55", "hang")
     fabrics = ("A",) if quick else ("A", "B")
-    models = (("kes5", "auto") if quick else ("kes5", "kes1", "auto")) if models is None else tuple(models)
+    default = ("kes5", "auto") if quick else ("kes5", "kes1", "auto")
+    models = default if models is None else tuple(models)
     for m in models:
         bottino_fabric("A", m)  # an unknown model is an error before anything runs
     duration = 1.2 if quick else 2.0
@@ -240,7 +241,7 @@ def validate(out, *, quick: bool = False, progress=None, models=None) -> Path:
         if progress:
             progress(done, total, f"{scene} {fab} {model} n={n} {mesh_kind}")
     lines = ["# Validation: Bottino et al.'s drape experiments and the Cusick drape test\n",
-             f"Written by `tailor validate{' --quick' if quick else ''}`. Bottino's metric: the mean distance [mm] "
+             f"Written by `tailor validate{' --quick' if quick else ''}{'' if models == default else ' --models ' + ','.join(models)}`. Bottino's metric: the mean distance [mm] "
              "between corresponding points (same rest position on the patch) of two settled shapes. "
              f"Patch 20 × 20 cm, {duration:g} s of settling, implicit Euler at 5 ms.\n"]
     pictures = []
