@@ -398,10 +398,12 @@ def _cmd_batch(args) -> int:
 
 def _models(text: str) -> tuple:
     """``--models``: comma-separated Bottino fabric models."""
+    from .validate import MODELS
+
     models = tuple(m.strip() for m in text.split(",") if m.strip())
-    bad = [m for m in models if m not in ("kes5", "kes1", "auto")]
+    bad = [m for m in models if m not in MODELS]
     if bad or not models:
-        raise argparse.ArgumentTypeError(f"unknown model {bad[0] if bad else text!r}; choose among kes5, kes1, auto")
+        raise argparse.ArgumentTypeError(f"unknown model {bad[0] if bad else text!r}; choose among {', '.join(MODELS)}")
     return models
 
 
