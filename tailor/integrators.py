@@ -298,6 +298,7 @@ class ImplicitEuler:
         # stuck contacts whose reaction leaves the Coulomb cone slide, and contacts the step would
         # make are held too, so the cloth lands on the body within the step instead of being
         # pushed out after it.
+        let_go = np.zeros(0, np.intp)
         for _ in range(self.contact_passes if converged else 0):
             changed = False
             if len(held):
@@ -307,6 +308,7 @@ class ImplicitEuler:
                 if pulled.any():
                     # the body would have to pull this contact to hold it: let it go (the cloth
                     # leaves the body here), and solve again before judging friction
+                    let_go = np.concatenate([let_go, held.ids[pulled]])
                     held = held.take(~pulled)
                     self.released += int(pulled.sum())
                     extra, converged = self._solve(system, rhs, dv, v, held)
@@ -336,7 +338,10 @@ class ImplicitEuler:
                 v1 = state.v + dv.reshape(n, 3)
                 more = self.predict(model, state, state.x + dt * v1, v1, dt)
                 if more is not None and len(more.ids):
-                    new = ~np.isin(more.ids, held.ids) & ~model.vertex_pinned[more.ids]
+                    # not one let go earlier in this step: released for a pull, then predicted to land
+                    # as its neighbours settle, it cycled, a solve each time (the response after the
+                    # step still keeps it out of the body)
+                    new = ~np.isin(more.ids, held.ids) & ~np.isin(more.ids, let_go) & ~model.vertex_pinned[more.ids]
                     if new.any():
                         held = held.join(_Held.of(more, new))
                         self.predicted += int(new.sum())
