@@ -315,12 +315,13 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
 
     deepest = [0.0]
 
-    def landing(model_, state, x_end, v_end, dt):
+    def landing(model_, state, x_end, v_end, dt, held):
         """Contacts the solved step would make with the body as it is at the step's end (sewn garments)."""
         if not sim["gravity"]:
             return None
         bx, bv, k = body_state(state.t + dt)
-        return Contacts(*collider.landing(model_, x_end, v_end, dt, bx, bv, k, thickness=thickness), model_.vertex_count)
+        return Contacts(*collider.landing(model_, x_end, v_end, dt, bx, bv, k, thickness=thickness, skip=held),
+                        model_.vertex_count)
 
     if hasattr(integ, "predict"):
         integ.predict = landing

@@ -189,8 +189,8 @@ class ImplicitEuler:
     fast-falling cloth apart where it meets a sphere at Δt = 0.01 s). The contacts are used for
     one step; afterwards :attr:`contact_ids` and :attr:`contact_impulse` give the normal
     impulse [N·s] each held vertex received (negative = the body had to pull: release it).
-    :attr:`predict`, if set, is ``predict(model, state, x_end, v_end, dt) -> Contacts`` for the
-    vertices the solved step would bring within the thickness of the body; they are held too
+    :attr:`predict`, if set, is ``predict(model, state, x_end, v_end, dt, held_ids) -> Contacts`` for the
+    vertices (other than those already held) the solved step would bring within the thickness of the body; they are held too
     (landing on the surface), stuck ones pulled harder than friction allows slide, and the step is
     solved again, at most :attr:`contact_passes` times. Friction inside the solve matters: a post-step friction that
     stops vertices the solve let slide leaves their neighbours stretched (2.7× on a sphere at 0.02 s).
@@ -336,7 +336,7 @@ class ImplicitEuler:
                     changed = True
             if self.predict is not None:
                 v1 = state.v + dv.reshape(n, 3)
-                more = self.predict(model, state, state.x + dt * v1, v1, dt)
+                more = self.predict(model, state, state.x + dt * v1, v1, dt, held.ids)
                 if more is not None and len(more.ids):
                     # not one let go earlier in this step: released for a pull, then predicted to land
                     # as its neighbours settle, it cycled, a solve each time (the response after the

@@ -128,8 +128,8 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
         if hasattr(integ, "wind"):
             integ.wind = wind
     if body_collider is not None and hasattr(integ, "predict"):
-        integ.predict = lambda m, st, x, v, h: Contacts(*body_collider.landing(m, x, v, h, bv, body_vel, 0, thickness=thickness),
-                                                        m.vertex_count)
+        integ.predict = lambda m, st, x, v, h, held: Contacts(*body_collider.landing(m, x, v, h, bv, body_vel, 0, thickness=thickness,
+                                                                                     skip=held), m.vertex_count)
 
     def contact(model_, st, h):
         if body_collider is not None:

@@ -340,12 +340,14 @@ TIE = 1e-9
 
 
 @njit(cache=True, parallel=True)
-def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal):
+def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal, rows):
     """Closest body triangle per point; equally close triangles (a point inside a body, on the
     medial plane between two faces: a cloth dropped on a sphere's top, predicted a step ahead)
     average their normals, so the push does not depend on the order of the triangles (picking
-    the first tilted a symmetric drop sideways, friction turned that into a drift of the patch)."""
-    for i in prange(len(ptr) - 1):
+    the first tilted a symmetric drop sideways, friction turned that into a drift of the patch).
+    Only the points ``rows`` are looked at."""
+    for j in prange(len(rows)):
+        i = rows[j]
         best = 1e30
         out_tri[i] = -1
         a0 = a1 = a2 = 0.0
@@ -447,11 +449,13 @@ class BodyCollider:
         ptr = np.concatenate([[0], np.cumsum(np.bincount(keys // len(self.faces), minlength=n))]).astype(np.int64)
         return ptr, keys % len(self.faces)
 
-    def _closest(self, x, ptr, tri, body_x):
-        """Narrow phase: signed distance, triangle (−1: none), barycentrics and normal per point."""
+    def _closest(self, x, ptr, tri, body_x, rows=None):
+        """Narrow phase: signed distance, triangle (−1: none), barycentrics and normal per point
+        (of the points ``rows`` only, if given: the others get none)."""
         n = len(x)
         dist, tri_out, bary, normal = np.full(n, np.inf), np.full(n, -1, np.int64), np.zeros((n, 3)), np.zeros((n, 3))
-        _nearest(np.ascontiguousarray(x), ptr, tri, np.ascontiguousarray(body_x), self.faces, dist, tri_out, bary, normal)
+        rows = np.arange(n, dtype=np.int64) if rows is None else np.asarray(rows, np.int64)
+        _nearest(np.ascontiguousarray(x), ptr, tri, np.ascontiguousarray(body_x), self.faces, dist, tri_out, bary, normal, rows)
         dist[tri_out < 0] = np.inf
         return dist, tri_out, bary, normal
 
@@ -495,8 +499,10 @@ class BodyCollider:
             self._previous[ids] = thickness
         return len(ids)
 
-    def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness: float):
+    def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness: float, skip=None):
         """Vertices a step would bring within ``thickness`` of the body: (ids, normals, normal velocity).
+
+        ``skip``: ids not to test (the contacts the solve already holds: most of a resting cloth's).
 
         ``x_end``, ``v_end`` are where a solved step would leave the cloth. A vertex that started
         the step outside (or just inside) the thickness and would end closer gets the normal
@@ -504,7 +510,12 @@ class BodyCollider:
         solve holding that (:class:`tailor.integrators.ImplicitEuler` ``predict``) lands the cloth
         within the step instead of having it pushed out afterwards.
         """
-        dist, tri, bary, normal = self.nearest(x_end, body_x, frame)
+        rows = None
+        if skip is not None and len(skip):
+            test = ~model.vertex_pinned
+            test[skip] = False
+            rows = np.flatnonzero(test)
+        dist, tri, bary, normal = self._closest(x_end, *self.candidates(x_end, frame), body_x, rows)
         close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
         if not len(close):
             return np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0)
