@@ -40,6 +40,32 @@ def test_contact_normal_does_not_depend_on_which_equally_close_triangle_comes_fi
     assert dist[1] < 0.0
 
 
+def test_signed_distance_round_a_box_agrees_with_the_exact_one_on_edges_corners_and_face_planes():
+    # a point level with a face's plane, off the box beyond an edge, is equally close to triangles of
+    # three faces; the one whose plane it lies in cannot tell the side (the cube scene threw such a
+    # vertex 15 mm off when that face, found first, decided "inside")
+    box = trimesh.creation.box(extents=(0.08, 0.08, 0.08)).subdivide().subdivide()
+    rng = np.random.default_rng(5)
+    h = 0.04
+    special = np.array([[-h, -0.0533, 0.0463], [-h, -h - 0.01, h + 0.01], [h + 0.01, 0.0, h], [0.0, 0.0, h + 1e-3],
+                        [-h, -h, 0.02], [0.03, 0.03, 0.039], [h, h, h]])
+    points = np.concatenate([special, rng.uniform(-0.06, 0.06, (2000, 3)),
+                             rng.choice([-h, h], (300, 3)) * (rng.random((300, 3)) < 0.5)
+                             + rng.uniform(-0.06, 0.06, (300, 3)) * (rng.random((300, 3)) >= 0.5)])
+    collider = BodyCollider(np.asarray(box.vertices)[None], box.faces, margin=0.2)
+    outside = np.maximum(np.abs(points) - h, 0.0)
+    exact = np.where(np.any(np.abs(points) > h, axis=1), np.linalg.norm(outside, axis=1), -np.min(h - np.abs(points), axis=1))
+    every = np.arange(len(box.faces))
+    ptr = np.arange(len(points) + 1, dtype=np.int64) * len(every)
+    for order in (every, every[::-1]):  # whichever of the equally close triangles comes first
+        dist, tri, _, normal = collider._closest(points, ptr, np.tile(order, len(points)), np.asarray(box.vertices))
+        assert np.all(tri >= 0)
+        assert np.allclose(dist, exact, atol=1e-9)
+        out = dist > 1e-6
+        assert np.allclose(normal[out], outside[out] * np.sign(points[out]) / dist[out, None], atol=1e-6)
+        assert dist[0] > 0.014 and dist[2] > 0.0
+
+
 def test_clustered_query_finds_exactly_the_pairs_of_one_sphere_per_point():
     from tailor.collide import TriangleBoxes, bvh_object, clustered_query, sphere_query
 

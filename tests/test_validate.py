@@ -41,6 +41,22 @@ def test_sphere_21_against_31_converges():
     assert d21 < 0.0045
 
 
+def test_patch_meeting_a_cube_edge_lands_without_being_thrown_off():
+    # Bottino's 8 cm cube, fabric A, n = 31: the patch's vertices beyond the cube's top edge, level
+    # with a side face, read "15 mm inside" from a partial set of cached triangles and were thrown
+    # off (stretched 4x at t = 0.04 s); now the run lands: nothing rises above where it started
+    from tailor.scenes import run_scene
+    from tailor.validate import STEP, patch_scene
+
+    setup = patch_scene("cube80", bottino_fabric("A", "kes5"), 31, duration=0.12)
+    result = run_scene(setup.model, setup.x0, body=setup.body, duration=setup.duration, fps=25, integrator="implicit",
+                       dt=STEP, thickness=setup.thickness, friction=setup.friction, self_collision="off")
+    x = result.frames[-1]
+    assert x[:, 2].max() <= setup.x0[:, 2].max() + 1e-6
+    top = np.all(np.abs(x[:, :2]) < 0.035, axis=1)  # over the cube's top face: resting on it
+    assert top.sum() > 100 and np.all(np.abs(x[top, 2] - 0.04) < 0.002)
+
+
 def test_drape_coefficient_grows_with_bending_and_lies_in_0_1():
     cotton = tailor.preset("cotton")
     dc = [cusick(cotton.with_values(bending=c), resolution=0.02, duration=1.5).drape_coefficient for c in (1.0, 8.0, 60.0)]

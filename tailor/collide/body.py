@@ -315,24 +315,23 @@ def _closest_barycentric(p, a, b, c):
 
 
 @njit(cache=True, inline="always")
-def _contact_normal(x, a, b, c, d0, d1, d2, dist2):
-    """(n0, n1, n2, signed distance) of ``x`` to its closest point on triangle abc at offset d.
+def _gradient(a, b, c, d0, d1, d2, dist2):
+    """(g0, g1, g2, cos) for a point at offset d from its closest point on triangle abc.
 
-    The normal is the distance field's gradient: the face normal over the face's inside, the
-    direction from the closest point over an edge or a vertex (so the same whichever face sharing
-    it is asked), signed by the face's side; the face normal for a point on the surface.
+    g is the unsigned direction of the distance field's gradient: d/|d| off the surface (over an
+    edge or a vertex, the same whichever face sharing it is asked), the face normal on it; cos is
+    d/|d| · (the face normal), the face's own vote on which side the point lies.
     """
     e0, e1, e2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
     f0, f1, f2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
     n0, n1, n2 = e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0
     nl = max(math.sqrt(n0 * n0 + n1 * n1 + n2 * n2), 1e-300)
     n0, n1, n2 = n0 / nl, n1 / nl, n2 / nl
-    s = d0 * n0 + d1 * n1 + d2 * n2
     dl = math.sqrt(dist2)
     if dl > 1e-9:
-        sg = 1.0 if s >= 0.0 else -1.0
-        return sg * d0 / dl, sg * d1 / dl, sg * d2 / dl, sg * dl
-    return n0, n1, n2, s
+        g0, g1, g2 = d0 / dl, d1 / dl, d2 / dl
+        return g0, g1, g2, g0 * n0 + g1 * n1 + g2 * n2
+    return n0, n1, n2, 0.0
 
 
 TIE = 1e-9
@@ -341,16 +340,25 @@ TIE = 1e-9
 
 @njit(cache=True, parallel=True)
 def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal, rows):
-    """Closest body triangle per point; equally close triangles (a point inside a body, on the
-    medial plane between two faces: a cloth dropped on a sphere's top, predicted a step ahead)
-    average their normals, so the push does not depend on the order of the triangles (picking
-    the first tilted a symmetric drop sideways, friction turned that into a drift of the patch).
-    Only the points ``rows`` are looked at."""
+    """Closest body triangle per point, its signed distance and the outward normal there.
+
+    Over an edge or a vertex several triangles are equally close. The side is the vote of the one
+    whose face normal is most nearly along the offset (the first one found decided before: a point
+    outside a box's corner, level with one of its faces, read 15 mm *inside* from that face's zero
+    vote and was thrown 15 mm off — the cube scene exploded at first contact). Equally close
+    triangles with different closest points (a point inside a body, on the medial plane between two
+    faces: a cloth dropped on a sphere's top, predicted a step ahead) average their directions, so
+    the push does not depend on the order of the triangles (picking the first tilted a symmetric
+    drop sideways, friction turned that into a drift of the patch). Only the points ``rows`` are
+    looked at."""
     for j in prange(len(rows)):
         i = rows[j]
         best = 1e30
         out_tri[i] = -1
         a0 = a1 = a2 = 0.0
+        vote = -1.0
+        side = 1.0
+        v0 = v1 = v2 = 0.0
         for k in range(ptr[i], ptr[i + 1]):
             t = tri[k]
             a, b, c = bx[faces[t, 0]], bx[faces[t, 1]], bx[faces[t, 2]]
@@ -361,18 +369,25 @@ def _nearest(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal, ro
             dist2 = d0 * d0 + d1 * d1 + d2 * d2
             if dist2 < best * (1.0 - TIE) - 1e-30:
                 best = dist2
-                n0, n1, n2, s = _contact_normal(x[i], a, b, c, d0, d1, d2, dist2)
-                a0, a1, a2 = n0, n1, n2
-                out_dist[i] = 0.0 if abs(s) < 1e-12 else s
+                a0, a1, a2, cs = _gradient(a, b, c, d0, d1, d2, dist2)
+                vote, side = abs(cs), (1.0 if cs >= 0.0 else -1.0)
+                v0, v1, v2 = a0, a1, a2
                 out_tri[i] = t
                 out_bary[i, 0], out_bary[i, 1], out_bary[i, 2] = u, v, w
-                out_normal[i, 0], out_normal[i, 1], out_normal[i, 2] = n0, n1, n2
             elif dist2 <= best * (1.0 + TIE) + 1e-30:
-                n0, n1, n2, s = _contact_normal(x[i], a, b, c, d0, d1, d2, dist2)
-                a0, a1, a2 = a0 + n0, a1 + n1, a2 + n2
+                g0, g1, g2, cs = _gradient(a, b, c, d0, d1, d2, dist2)
+                a0, a1, a2 = a0 + g0, a1 + g1, a2 + g2
+                if abs(cs) > vote:
+                    vote, side = abs(cs), (1.0 if cs >= 0.0 else -1.0)
+                    v0, v1, v2 = g0, g1, g2
+        if out_tri[i] < 0:
+            continue
+        dl = math.sqrt(best)
+        out_dist[i] = side * dl if dl > 1e-12 else 0.0
         al = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-        if out_tri[i] >= 0 and al > 1e-6:
-            out_normal[i, 0], out_normal[i, 1], out_normal[i, 2] = a0 / al, a1 / al, a2 / al
+        if al < 1e-6:  # opposite directions cancelled (a thin sheet's medial plane): the decisive one's
+            a0, a1, a2, al = v0, v1, v2, 1.0
+        out_normal[i, 0], out_normal[i, 1], out_normal[i, 2] = side * a0 / al, side * a1 / al, side * a2 / al
 
 
 class BodyCollider:
@@ -474,7 +489,25 @@ class BodyCollider:
 
         Vertices with no body triangle within the margin get triangle −1 and distance +inf.
         """
-        return self._closest(x, *self.candidates(x, frame, cache=cache), body_x)
+        return self._confirm_deep(x, self._closest(x, *self.candidates(x, frame, cache=cache), body_x), body_x)
+
+    def _confirm_deep(self, x, found, body_x):
+        """``found`` with the vertices read deeper than half the margin checked against the closed surface.
+
+        The cached candidates hold every triangle within half the margin of a vertex, but only
+        some of those farther off. Beyond half the margin the closest of them is still farther than
+        half the margin (the true distance is too), but its side is the vote of whichever faces
+        happened to be cached: a vertex 15 mm outside a cube's corner, level with one face and with
+        only that face's triangles cached, read 15 mm *inside*, counted as having crossed, and was
+        thrown 15 mm off (the cube scene exploded at first contact). Such vertices are tested
+        against the closed surface (:func:`points_inside`); those outside are out of reach.
+        """
+        dist, tri, bary, normal = found
+        deep = np.flatnonzero((tri >= 0) & (dist < -0.5 * self.margin))
+        if len(deep):
+            out = deep[~points_inside(x[deep], body_x, self.faces)]
+            tri[out], dist[out] = -1, np.inf
+        return dist, tri, bary, normal
 
     def rescue(self, model, state, body_x, body_v, frame: int, *, thickness: float, reach: float = 0.15) -> int:
         """Return cloth vertices trapped inside the body to its surface; how many were moved.
@@ -515,7 +548,8 @@ class BodyCollider:
             test = ~model.vertex_pinned
             test[skip] = False
             rows = np.flatnonzero(test)
-        dist, tri, bary, normal = self._closest(x_end, *self.candidates(x_end, frame), body_x, rows)
+        dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, *self.candidates(x_end, frame), body_x, rows),
+                                                     body_x)
         close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
         if not len(close):
             return np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0)
