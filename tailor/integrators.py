@@ -176,6 +176,10 @@ class ImplicitEuler:
     tolerance : float
         Relative residual at which CG stops.
     max_iterations : int
+        Of one CG solve. A stiff fabric on a fine mesh needs many (Bottino's fabric A with one
+        Kawabata segment, 31 × 31 on the 9 cm sphere at 5 ms: 500–2 000 at tol 1e-5); stopping at 500
+        halved the step 228 times in 80 steps, each after 500 wasted iterations (23 s against
+        8.5 s for 0.4 s simulated at 2 000).
     max_halvings : int
         A step whose CG does not converge within ``max_iterations`` is taken as two half steps
         (M + Δt²K is better conditioned the smaller Δt is), at most this many times over.
@@ -199,7 +203,7 @@ class ImplicitEuler:
     name = "implicit"
     explicit = False
 
-    def __init__(self, tolerance: float = 1e-5, max_iterations: int = 500, max_halvings: int = 3):
+    def __init__(self, tolerance: float = 1e-5, max_iterations: int = 2000, max_halvings: int = 3):
         self.tolerance = tolerance
         self.max_iterations = max_iterations
         self.max_halvings = max_halvings
