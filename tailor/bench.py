@@ -2,7 +2,7 @@
 
 For each reference scene (:mod:`tailor.scenes`) the sweep runs integrator × time step ×
 resolution (and the implicit solver tolerance of the quality presets), and records wall time,
-steps, CG iterations, peak traced memory, whether the run stayed stable, and its error against a
+steps, CG iterations, peak memory (the resident set the run added at its peak), whether the run stayed stable, and its error against a
 converged reference run (finest mesh, small step, tight tolerance): the mean and max distance
 [mm] between final positions at the same **rest (uv) points**, so different resolutions compare.
 Time steps are also given as multiples of the model's Eq. 24 step.
@@ -21,7 +21,6 @@ import csv
 import io
 import math
 import time
-import tracemalloc
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -135,23 +134,60 @@ def rest_error(ref_uv, ref_x, uv, x, ref_panel=None, panel=None):
     return float(d.mean()), float(d.max())
 
 
+class PeakMemory:
+    """Peak resident memory [MB] a block of code added, from the kernel's high-water mark.
+
+    Linux: ``/proc/self/clear_refs`` resets VmHWM to the current resident set on entry, and
+    ``mb`` is VmHWM − VmRSS(entry) on exit. It costs nothing while the code runs (``tracemalloc``
+    slowed Python-heavy runs about 2×, so the bench's timings were not the real ones) and counts
+    what numba and the libraries allocate too. Elsewhere ``mb`` stays NaN.
+    """
+
+    def __init__(self):
+        self.mb = math.nan
+        self._start = None
+
+    @staticmethod
+    def _status(key):
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(key + ":"):
+                    return int(line.split()[1])  # kB
+        raise OSError(key)
+
+    def __enter__(self):
+        try:
+            with open("/proc/self/clear_refs", "w") as f:
+                f.write("5")
+            self._start = self._status("VmRSS")
+        except OSError:
+            self._start = None
+        return self
+
+    def __exit__(self, *exc):
+        if self._start is not None:
+            try:
+                self.mb = max(0.0, (self._status("VmHWM") - self._start) / 1024)
+            except OSError:
+                pass
+        return False
+
+
 def _measure(setup: Setup, run: Run) -> Run:
-    tracemalloc.start()
-    t0 = time.perf_counter()
-    try:
-        result = setup.run(integrator=run.integrator, dt=run.dt, tolerance=run.tolerance)
-    except SimulationUnstable as exc:
-        run.stable, run.note = False, str(exc).split(":")[0]
-        run.wall_s = time.perf_counter() - t0
-    else:
-        run.wall_s = time.perf_counter() - t0
-        run.steps, run.cg_iterations = result.report["steps"], result.report.get("cg_iterations", 0)
-        run.final, run.uv = result.frames[-1], setup.mesh.uv
-        if not np.isfinite(run.final).all():  # the guard must make this impossible
-            run.stable, run.note = False, "FAILED: non-finite frame"
-    finally:
-        run.peak_mb = tracemalloc.get_traced_memory()[1] / 2**20
-        tracemalloc.stop()
+    with PeakMemory() as memory:
+        t0 = time.perf_counter()
+        try:
+            result = setup.run(integrator=run.integrator, dt=run.dt, tolerance=run.tolerance)
+        except SimulationUnstable as exc:
+            run.stable, run.note = False, str(exc).split(":")[0]
+            run.wall_s = time.perf_counter() - t0
+        else:
+            run.wall_s = time.perf_counter() - t0
+            run.steps, run.cg_iterations = result.report["steps"], result.report.get("cg_iterations", 0)
+            run.final, run.uv = result.frames[-1], setup.mesh.uv
+            if not np.isfinite(run.final).all():  # the guard must make this impossible
+                run.stable, run.note = False, "FAILED: non-finite frame"
+    run.peak_mb = memory.mb
     return run
 
 
@@ -221,24 +257,23 @@ def _garment_sweep(scene: GarmentScene, quick: bool, progress, start: int, total
         preset_q = QUALITY[q]
         run = Run(scene.name, "implicit", level, preset_q.step, math.nan, preset_q.tolerance,
                   "reference" if k == 0 else q)
-        tracemalloc.start()
-        t0 = time.perf_counter()
-        try:
-            x, uv, panel, report = scene.run(level, q, frames)
-        except SimulationUnstable as exc:
-            run.stable, run.note = False, str(exc).split(":")[0]
-        else:
-            run.final, run.uv = x, uv
-            run.steps, run.cg_iterations = report.get("steps", 0), report.get("cg_iterations", 0)
-            run.eq24_multiple = preset_q.step / report["time_step_eq24_s"]
-            if k == 0:
-                ref = (uv, x, panel)
+        with PeakMemory() as memory:
+            t0 = time.perf_counter()
+            try:
+                x, uv, panel, report = scene.run(level, q, frames)
+            except SimulationUnstable as exc:
+                run.stable, run.note = False, str(exc).split(":")[0]
             else:
-                mean, worst = rest_error(ref[0], ref[1], uv, x, ref[2], panel)
-                run.error_mean_mm, run.error_max_mm = 1e3 * mean, 1e3 * worst
-        run.wall_s = time.perf_counter() - t0
-        run.peak_mb = tracemalloc.get_traced_memory()[1] / 2**20
-        tracemalloc.stop()
+                run.final, run.uv = x, uv
+                run.steps, run.cg_iterations = report.get("steps", 0), report.get("cg_iterations", 0)
+                run.eq24_multiple = preset_q.step / report["time_step_eq24_s"]
+                if k == 0:
+                    ref = (uv, x, panel)
+                else:
+                    mean, worst = rest_error(ref[0], ref[1], uv, x, ref[2], panel)
+                    run.error_mean_mm, run.error_max_mm = 1e3 * mean, 1e3 * worst
+            run.wall_s = time.perf_counter() - t0
+        run.peak_mb = memory.mb
         runs.append(run)
         if progress is not None:
             progress(start + k + 1, total, run)
@@ -290,7 +325,7 @@ def _table(runs) -> str:
         lines.append(
             f"| {r.scene} | {r.integrator} | {r.resolution} | {r.dt:.3g} | {r.eq24_multiple:.3g} | "
             f"{'' if r.tolerance is None else f'{r.tolerance:.0e}'} | {r.label} | {r.wall_s:.2f} | {r.steps} | {r.cg_iterations} | "
-            f"{r.peak_mb:.0f} | {'yes' if r.stable else 'no: ' + r.note} | {r.error_mean_mm:.2f} | {r.error_max_mm:.2f} |")
+            f"{'—' if math.isnan(r.peak_mb) else f'{r.peak_mb:.0f}'} | {'yes' if r.stable else 'no: ' + r.note} | {r.error_mean_mm:.2f} | {r.error_max_mm:.2f} |")
     return "\n".join(lines)
 
 

@@ -69,3 +69,22 @@ def test_rest_error_matches_rest_points_panel_by_panel():
     ref_x = np.c_[ref_uv, 0.05 * ref_panel]
     assert bench.rest_error(ref_uv, ref_x, uv, x, ref_panel, panel)[1] < 1e-9
     assert bench.rest_error(ref_uv, ref_x, uv, x, ref_panel, 1 - panel)[0] == pytest.approx(0.05)
+
+
+def test_peak_memory_counts_what_the_block_allocated():
+    import sys
+
+    import numpy as np
+
+    from tailor.bench import PeakMemory
+
+    with PeakMemory() as small:
+        pass
+    with PeakMemory() as big:
+        a = np.ones(10_000_000)  # 80 MB, touched
+        del a
+    if not sys.platform.startswith("linux"):
+        assert np.isnan(big.mb)
+        return
+    assert 70.0 < big.mb < 200.0
+    assert small.mb < 10.0

@@ -37,8 +37,9 @@ def test_sphere_21_against_31_converges():
     runs = {n: _run_patch("sphere", bottino_fabric("A", "kes5"), n) for n in (11, 21, 31)}
     d21 = _shape_distance(runs[31][:2], runs[21][:2])
     assert d21 < _shape_distance(runs[31][:2], runs[11][:2])
-    # the target is 3.5 mm; measured 3.9 mm (folds are chaotic: 7.5 mm at a 2.5 ms step)
-    assert d21 < 0.0045
+    # the target: 3.5 mm (measured 2.9 mm; 3.9 mm before a contact read the wrong side of a
+    # body edge; the folds are chaotic: 7.5 mm at a 2.5 ms step then)
+    assert d21 < 0.0035
 
 
 def test_patch_meeting_a_cube_edge_lands_without_being_thrown_off():
