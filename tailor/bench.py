@@ -2,7 +2,7 @@
 
 For each reference scene (:mod:`tailor.scenes`) the sweep runs integrator × time step ×
 resolution (and the implicit solver tolerance of the quality presets), and records wall time,
-steps, CG iterations, peak memory (the resident set the run added at its peak), whether the run stayed stable, and its error against a
+steps, CG iterations, peak resident memory of the process during the run, whether the run stayed stable, and its error against a
 converged reference run (finest mesh, small step, tight tolerance): the mean and max distance
 [mm] between final positions at the same **rest (uv) points**, so different resolutions compare.
 Time steps are also given as multiples of the model's Eq. 24 step.
@@ -135,16 +135,18 @@ def rest_error(ref_uv, ref_x, uv, x, ref_panel=None, panel=None):
 
 
 class PeakMemory:
-    """Peak resident memory [MB] a block of code added, from the kernel's high-water mark.
+    """Peak resident memory [MB] of the process while a block of code ran, from the kernel's high-water mark.
 
-    Linux: ``/proc/self/clear_refs`` resets VmHWM to the current resident set on entry, and
-    ``mb`` is VmHWM − VmRSS(entry) on exit. It costs nothing while the code runs (``tracemalloc``
-    slowed Python-heavy runs about 2×, so the bench's timings were not the real ones) and counts
-    what numba and the libraries allocate too. Elsewhere ``mb`` stays NaN.
+    Linux: ``/proc/self/clear_refs`` resets VmHWM to the current resident set on entry; ``mb`` is
+    VmHWM on exit (interpreter and libraries included: what running it takes), ``added`` that
+    minus the resident set on entry (0 when the run fit in memory the process already held).
+    It costs nothing while the code runs (``tracemalloc`` slowed Python-heavy runs about 2×, so the
+    bench's wall times were not the real ones) and counts what numba and the libraries allocate
+    too. Elsewhere both stay NaN.
     """
 
     def __init__(self):
-        self.mb = math.nan
+        self.mb = self.added = math.nan
         self._start = None
 
     @staticmethod
@@ -167,9 +169,11 @@ class PeakMemory:
     def __exit__(self, *exc):
         if self._start is not None:
             try:
-                self.mb = max(0.0, (self._status("VmHWM") - self._start) / 1024)
+                peak = self._status("VmHWM")
             except OSError:
-                pass
+                return False
+            self.mb = peak / 1024
+            self.added = max(0.0, (peak - self._start) / 1024)
         return False
 
 
@@ -319,7 +323,7 @@ def pareto(runs):
 
 
 def _table(runs) -> str:
-    head = "| scene | integrator | n or mm | Δt [s] | × Eq. 24 | tol | preset | wall [s] | steps | CG its | peak MB | stable | mean err [mm] | max err [mm] |"
+    head = "| scene | integrator | n or mm | Δt [s] | × Eq. 24 | tol | preset | wall [s] | steps | CG its | peak RSS MB | stable | mean err [mm] | max err [mm] |"
     lines = [head, "|" + "---|" * 14]
     for r in runs:
         lines.append(
