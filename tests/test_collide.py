@@ -66,6 +66,22 @@ def test_signed_distance_round_a_box_agrees_with_the_exact_one_on_edges_corners_
         assert dist[0] > 0.014 and dist[2] > 0.0
 
 
+def test_landing_skips_the_vertices_it_is_told_are_held_and_finds_the_same_others():
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.2)
+    model, x0 = sheet(10, 10, 0.01, "cotton", vertical=False)
+    x = x0 - x0.mean(axis=0) + [0.0, 0.0, 0.2015]  # resting on the top, 1.5 mm up
+    v = np.tile([0.0, 0.0, -0.5], (len(x), 1))  # a step of 10 ms would bring the middle in
+    body = np.asarray(ball.vertices)
+    collider = BodyCollider(body[None], ball.faces, margin=0.02)
+    ids, normals, vn = collider.landing(model, x + 0.01 * v, v, 0.01, body, np.zeros_like(body), 0, thickness=0.002)
+    assert len(ids) > 10
+    skip = ids[::2]
+    ids2, normals2, vn2 = collider.landing(model, x + 0.01 * v, v, 0.01, body, np.zeros_like(body), 0, thickness=0.002,
+                                           skip=skip)
+    keep = ~np.isin(ids, skip)
+    assert np.array_equal(ids2, ids[keep]) and np.allclose(normals2, normals[keep]) and np.allclose(vn2, vn[keep])
+
+
 def test_clustered_query_finds_exactly_the_pairs_of_one_sphere_per_point():
     from tailor.collide import TriangleBoxes, bvh_object, clustered_query, sphere_query
 
