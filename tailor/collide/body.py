@@ -489,7 +489,8 @@ class BodyCollider:
 
         Vertices with no body triangle within the margin get triangle −1 and distance +inf.
         """
-        return self._confirm_deep(x, self._closest(x, *self.candidates(x, frame, cache=cache), body_x), body_x)
+        found = self._closest(x, *self.candidates(x, frame, cache=cache), body_x)
+        return self._confirm_deep(x, found, body_x) if cache else found  # uncached: complete within the margin
 
     def _confirm_deep(self, x, found, body_x):
         """``found`` with the vertices read deeper than half the margin checked against the closed surface.
@@ -500,7 +501,8 @@ class BodyCollider:
         happened to be cached: a vertex 15 mm outside a cube's corner, level with one face and with
         only that face's triangles cached, read 15 mm *inside*, counted as having crossed, and was
         thrown 15 mm off (the cube scene exploded at first contact). Such vertices are tested
-        against the closed surface (:func:`points_inside`); those outside are out of reach.
+        against the closed surface (:func:`points_inside`, as :meth:`rescue` does: the body must be
+        watertight for either); those outside are out of reach.
         """
         dist, tri, bary, normal = found
         deep = np.flatnonzero((tri >= 0) & (dist < -0.5 * self.margin))
