@@ -16,7 +16,8 @@ def _cloth(n, fabric="cotton", **kw):
     return mesh, build_model(mesh, preset(fabric), **kw)
 
 
-def test_held_vertices_end_the_step_at_their_prescribed_normal_velocity():
+def _moving_cloth_with_contacts():
+    """(model, state, ids, normals, target): a rumpled moving 8 × 8 cloth, five contacts in random directions."""
     mesh, model = _cloth(8)
     rng = np.random.default_rng(1)
     x = np.c_[mesh.uv, np.zeros(len(mesh.uv))] + 0.003 * rng.standard_normal((len(mesh.uv), 3))
@@ -24,7 +25,11 @@ def test_held_vertices_end_the_step_at_their_prescribed_normal_velocity():
     ids = np.array([3, 10, 20, 41, 50])
     normals = rng.standard_normal((len(ids), 3))
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    target = np.array([0.0, 0.1, -0.05, 0.0, 0.2])
+    return model, state, ids, normals, np.array([0.0, 0.1, -0.05, 0.0, 0.2])
+
+
+def test_held_vertices_end_the_step_at_their_prescribed_normal_velocity():
+    model, state, ids, normals, target = _moving_cloth_with_contacts()
     integ = ImplicitEuler(tolerance=1e-10)
     integ.contacts = Contacts(ids, normals, target, model.vertex_count)
     from tailor.forces import total_forces
@@ -48,14 +53,7 @@ def test_a_contact_let_go_is_not_predicted_back_and_held_ones_are_not_asked_abou
     # a prediction that keeps naming every contact (as the landing query did for a contact let go
     # while its neighbours settled) must not bring back one let go within the step: that cycled,
     # a solve each pass; and predict is told which vertices are held, so it need not test them
-    mesh, model = _cloth(8)
-    rng = np.random.default_rng(1)
-    x = np.c_[mesh.uv, np.zeros(len(mesh.uv))] + 0.003 * rng.standard_normal((len(mesh.uv), 3))
-    state = model.state(x, 0.2 * rng.standard_normal((len(x), 3)))
-    ids = np.array([3, 10, 20, 41, 50])
-    normals = rng.standard_normal((len(ids), 3))
-    normals /= np.linalg.norm(normals, axis=1)[:, None]
-    target = np.array([0.0, 0.1, -0.05, 0.0, 0.2])
+    model, state, ids, normals, target = _moving_cloth_with_contacts()
     told = []
 
     def predict(model_, st, x_end, v_end, dt, held_ids):

@@ -271,25 +271,24 @@ def bending_jacobian_into(model, x, positions, kdata, *, stiffness=None) -> None
     _bending_jacobian(x, model.hinge_vertices, model.hinge_stiffness if stiffness is None else stiffness, positions, kdata)
 
 
+@njit(cache=True, inline="always")
+def _block_row(bptr, bcol, blocks, x, i):
+    """Row ``i`` of A·x for A in 3×3 block-CSR form: (a0, a1, a2)."""
+    a0 = a1 = a2 = 0.0
+    for p in range(bptr[i], bptr[i + 1]):
+        j = 3 * bcol[p]
+        x0, x1, x2 = x[j], x[j + 1], x[j + 2]
+        a0 += blocks[p, 0, 0] * x0 + blocks[p, 0, 1] * x1 + blocks[p, 0, 2] * x2
+        a1 += blocks[p, 1, 0] * x0 + blocks[p, 1, 1] * x1 + blocks[p, 1, 2] * x2
+        a2 += blocks[p, 2, 0] * x0 + blocks[p, 2, 1] * x1 + blocks[p, 2, 2] * x2
+    return a0, a1, a2
+
+
 @njit(cache=True, parallel=True)
 def bsr_matvec(bptr, bcol, blocks, x, out):
     """out = A·x for A in 3×3 block-CSR form (one block row per vertex), threaded over vertices."""
     for i in prange(len(bptr) - 1):
-        a0 = a1 = a2 = 0.0
-        for p in range(bptr[i], bptr[i + 1]):
-            j = 3 * bcol[p]
-            x0, x1, x2 = x[j], x[j + 1], x[j + 2]
-            a0 += blocks[p, 0, 0] * x0 + blocks[p, 0, 1] * x1 + blocks[p, 0, 2] * x2
-            a1 += blocks[p, 1, 0] * x0 + blocks[p, 1, 1] * x1 + blocks[p, 1, 2] * x2
-            a2 += blocks[p, 2, 0] * x0 + blocks[p, 2, 1] * x1 + blocks[p, 2, 2] * x2
-        out[3 * i] = a0
-        out[3 * i + 1] = a1
-        out[3 * i + 2] = a2
-
-
-_CHUNK = 1024
-"""Vertices per partial sum of the CG's dot products: fixed, so the sums have the same bits whatever
-the thread count (runs are reproducible)."""
+        out[3 * i], out[3 * i + 1], out[3 * i + 2] = _block_row(bptr, bcol, blocks, x, i)
 
 
 @njit(cache=True, inline="always")
@@ -311,13 +310,7 @@ def _cg_product(bptr, bcol, blocks, p, q, held, normals, stick, part):
     for ch in prange((n + _CHUNK - 1) // _CHUNK):
         acc = 0.0
         for i in range(ch * _CHUNK, min(n, (ch + 1) * _CHUNK)):
-            a0 = a1 = a2 = 0.0
-            for k in range(bptr[i], bptr[i + 1]):
-                j = 3 * bcol[k]
-                x0, x1, x2 = p[j], p[j + 1], p[j + 2]
-                a0 += blocks[k, 0, 0] * x0 + blocks[k, 0, 1] * x1 + blocks[k, 0, 2] * x2
-                a1 += blocks[k, 1, 0] * x0 + blocks[k, 1, 1] * x1 + blocks[k, 1, 2] * x2
-                a2 += blocks[k, 2, 0] * x0 + blocks[k, 2, 1] * x1 + blocks[k, 2, 2] * x2
+            a0, a1, a2 = _block_row(bptr, bcol, blocks, p, i)
             a0, a1, a2 = _held_part(a0, a1, a2, held[i], normals, stick)
             q[3 * i], q[3 * i + 1], q[3 * i + 2] = a0, a1, a2
             acc += p[3 * i] * a0 + p[3 * i + 1] * a1 + p[3 * i + 2] * a2
