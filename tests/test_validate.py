@@ -32,8 +32,8 @@ def test_sphere_quick_resolutions_agree_and_rest_on_the_sphere():
     assert r.min() > 0.045 - 0.001  # nothing inside the 9 cm sphere beyond a millimetre
 
 
-@pytest.mark.slow
 def test_sphere_21_against_31_converges():
+    # the issue's own check, in CI (~30 s): the full 2 s of settling at 11, 21 and 31
     runs = {n: _run_patch("sphere", bottino_fabric("A", "kes5"), n) for n in (11, 21, 31)}
     d21 = _shape_distance(runs[31][:2], runs[21][:2])
     assert d21 < _shape_distance(runs[31][:2], runs[11][:2])
