@@ -301,16 +301,22 @@ def savings(*, quick: bool = False, progress=None) -> list[tuple[str, str, float
                                                                        "bending", "friction", "thickness")}, **change})
         setup = sphere_drop(n, fabric=fabric)
         t0 = time.perf_counter()
-        result = setup.run(dt=QUALITY["normal"].step, tolerance=QUALITY["normal"].tolerance, self_collision=selfc)
         detail = (f"{setup.model.vertex_count} vertices, bending pass "
                   f"{'run over ' + str(len(setup.model.hinge_vertices)) + ' hinges' if setup.model.has_bending else 'skipped'}")
-        if selfc != "off":
-            sc = result.report["self_collision"]
-            detail += (f", self-collision active in {sc['active_steps']} of {sc['steps']} steps, "
-                       f"at most {sc['max_active_vertices']} vertices checked, {sc['query_s']:.2f} s in queries")
+        try:
+            result = setup.run(dt=QUALITY["normal"].step, tolerance=QUALITY["normal"].tolerance, self_collision=selfc)
+        except SimulationUnstable as exc:  # recorded like a sweep's run: one row must not cost the bench
+            detail += f"; stopped: {exc}"
+            outcome = "unstable"
+        else:
+            if selfc != "off":
+                sc = result.report["self_collision"]
+                detail += (f", self-collision active in {sc['active_steps']} of {sc['steps']} steps, "
+                           f"at most {sc['max_active_vertices']} vertices checked, {sc['query_s']:.2f} s in queries")
+            outcome = "ok"
         rows.append((what, variant, time.perf_counter() - t0, detail))
         if progress is not None:
-            progress(k + 1, len(cases), (what, variant, 0.0, "ok"))
+            progress(k + 1, len(cases), (what, variant, 0.0, outcome))
     return rows
 
 

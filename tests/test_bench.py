@@ -88,3 +88,32 @@ def test_peak_memory_counts_what_the_block_allocated():
         return
     assert 70.0 < big.added < 200.0 and big.mb > big.added
     assert small.added < 10.0 and small.mb < big.mb
+
+
+def test_a_savings_run_that_goes_unstable_is_recorded_not_fatal(monkeypatch):
+    # the full bench lost ten minutes of sweep results when one savings run stopped
+    import types
+
+    from tailor import bench
+    from tailor.errors import SimulationUnstable
+
+    real = bench.sphere_drop
+
+    def fake(n, fabric):
+        setup = real(4, fabric=fabric)
+
+        def run(dt, tolerance, self_collision):
+            if self_collision == "auto":
+                raise SimulationUnstable("simulation unstable at t = 0.24 s: stretched 4.09x")
+            report = {"self_collision": {"active_steps": 1, "steps": 2, "max_active_vertices": 3, "query_s": 0.0}}
+            return types.SimpleNamespace(report=report)
+
+        setup.run = run
+        return setup
+
+    monkeypatch.setattr(bench, "sphere_drop", fake)
+    seen = []
+    rows = bench.savings(quick=True, progress=lambda i, total, item: seen.append(item[3]))
+    assert len(rows) == 5 and seen.count("unstable") == 1
+    auto = [r for r in rows if r[1] == "auto"][0]
+    assert "stopped: simulation unstable" in auto[3]
