@@ -26,6 +26,7 @@ from .errors import SimulationUnstable
 from .forces.external import air_damping
 from .forces.jacobian import SparsePattern, jacobian_data
 from .forces.kernels import block_pcg, bsr_matvec, inverse_3x3
+from .forces.membrane import face_stretch
 from .model import State
 
 __all__ = ["INTEGRATORS", "make_integrator", "ForwardEuler", "SymplecticEuler", "Verlet", "RK4", "ImplicitEuler", "Contacts"]
@@ -184,6 +185,15 @@ class ImplicitEuler:
         A step whose CG does not converge within ``max_iterations`` is taken as two half steps
         (M + Δt²K is better conditioned the smaller Δt is), at most this many times over.
         ``halvings`` counts how often that happened.
+    max_stretch_change : float
+        A step that would stretch any triangle by more than this (principal stretch, above the
+        larger of its start and rest) is also taken as two half steps, up to ``max_halvings``
+        deep (Baraff & Witkin 1998 §5.3's adaptive step: reject a step whose stretch changes too
+        much). One linearised step rotates an edge about a held or stopped neighbour along the
+        tangent, lengthening it by √(1 + θ²) for a rotation θ = |Δv|·Δt / length: cloth falling
+        past a sphere's equator at 0.02–0.04 s steps was stretched 2–6× in one step (and the run
+        stopped or not with round-off of the contact passes); halving the step quarters that.
+        ``stretch_halvings`` counts these.
 
     Contacts
     --------
@@ -203,11 +213,14 @@ class ImplicitEuler:
     name = "implicit"
     explicit = False
 
-    def __init__(self, tolerance: float = 1e-5, max_iterations: int = 2000, max_halvings: int = 3):
+    def __init__(self, tolerance: float = 1e-5, max_iterations: int = 2000, max_halvings: int = 3,
+                 max_stretch_change: float = 0.3):
         self.tolerance = tolerance
         self.max_iterations = max_iterations
         self.max_halvings = max_halvings
+        self.max_stretch_change = max_stretch_change
         self.halvings = 0
+        self.stretch_halvings = 0
         self._pattern = None
         self._pattern_model = None
         self._warm = None
@@ -268,6 +281,24 @@ class ImplicitEuler:
         out = np.empty_like(dv)
         bsr_matvec(system[0], system[1], system[2], dv, out)
         return (out - rhs).reshape(-1, 3)[held.ids]
+
+    def _halves(self, model, state, dt, forces, depth, carried):
+        """The step taken as two half steps, each holding the contacts this one was given."""
+        self._warm = None
+        self.contacts = carried
+        half = self.step(model, state, 0.5 * dt, forces, depth + 1)
+        self.contacts = carried
+        return self.step(model, half, 0.5 * dt, forces, depth + 1)
+
+    def _overstretches(self, model, state, x_end) -> bool:
+        """Whether ending at ``x_end`` stretches a triangle more than ``max_stretch_change`` this step."""
+        if not model.face_count:
+            return False
+        end = face_stretch(model, x_end)
+        limit = 1.0 + self.max_stretch_change
+        if end.max(initial=1.0) <= limit:  # the common case: no triangle near it, no start needed
+            return False
+        return bool((end - np.maximum(face_stretch(model, state.x), 1.0)).max() > self.max_stretch_change)
 
     def step(self, model, state, dt, forces, _depth: int = 0):
         pattern = self._pattern_for(model)
@@ -359,10 +390,7 @@ class ImplicitEuler:
         self.solves += 1
         if not converged and iterations >= self.max_iterations and _depth < self.max_halvings and np.all(np.isfinite(dv)):
             self.halvings += 1
-            self._warm = None
-            half = self.step(model, state, 0.5 * dt, forces, _depth + 1)
-            self.contacts = carried
-            return self.step(model, half, 0.5 * dt, forces, _depth + 1)
+            return self._halves(model, state, dt, forces, _depth, carried)
         if not converged:
             log.warning("implicit step at t = %.4f s: CG stopped after %d iterations before reaching %.0e", state.t, iterations, self.tolerance)
         if not np.all(np.isfinite(dv)) or (not converged and iterations < self.max_iterations):
@@ -371,6 +399,9 @@ class ImplicitEuler:
                 f"try a smaller time step"
             )
         dv[~free] = 0.0
+        if _depth < self.max_halvings and self._overstretches(model, state, state.x + dt * (state.v + dv.reshape(n, 3))):
+            self.stretch_halvings += 1
+            return self._halves(model, state, dt, forces, _depth, carried)
         self._warm = dv
         self.contacts = None
         self.contact_vertex_count = n

@@ -180,6 +180,8 @@ class Setup:
                            dt=dt, thickness=self.thickness, friction=self.friction, self_collision=self_collision,
                            guard=guard, forces=forces, v0=v0, wind=wind)
         result.report["cg_iterations"] = int(getattr(integ, "total_iterations", 0))
+        result.report["halved_steps"] = {"unconverged": int(getattr(integ, "halvings", 0)),
+                                         "overstretch": int(getattr(integ, "stretch_halvings", 0))}
         return result
 
 

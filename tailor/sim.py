@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import SimulationUnstable
 from .forces import total_forces
-from .forces.membrane import deformation_gradient
+from .forces.membrane import face_stretch
 from .integrators import Contacts, make_integrator
 
 __all__ = ["Quality", "QUALITY", "Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP", "held_impulse", "hold_contacts"]
@@ -85,15 +85,6 @@ class Guard:
     max_speed: float = 50.0
     max_stretch: float = 3.0
     strain_every: int = 50
-
-
-def face_stretch(model, x) -> np.ndarray:
-    """Largest principal stretch of each triangle (1 = rest), shape (F,)."""
-    f = deformation_gradient(model, x)
-    c = np.einsum("fki,fkj->fij", f, f)  # right Cauchy–Green, (F, 2, 2)
-    tr = c[:, 0, 0] + c[:, 1, 1]
-    det = c[:, 0, 0] * c[:, 1, 1] - c[:, 0, 1] ** 2
-    return np.sqrt(0.5 * tr + np.sqrt(np.maximum(0.25 * tr * tr - det, 0.0)))
 
 
 def max_stretch(model, x) -> float:

@@ -201,6 +201,7 @@ def test_stiff_pair_springs_close_a_gap_stably_under_the_implicit_solver():
     predicted = -((k_all - k_cloth) @ dx.reshape(-1)).reshape(-1, 3)
     assert np.allclose(pair_forces(stiff, moved) - f, predicted, atol=1e-9)  # linear springs: K is exact
     integ = make_integrator("implicit")
+    integ.max_stretch_change = np.inf  # as drape sews: the seams' pull stretches the seam triangles by design
     gaps = []
     for _ in range(30):
         state = integ.step(stiff, state, 0.01, total_forces)

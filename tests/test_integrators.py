@@ -176,3 +176,25 @@ def test_soft_cloth_stretched_at_its_pins_stays_stable_at_the_default_explicit_s
     final = run(model, state, duration=0.5, integrator=name)
     assert np.isfinite(final.x).all()
     assert 1.3 < max_stretch(model, final.x) < 2.5  # really stretched at the pins, not exploded
+
+
+def test_implicit_step_halves_where_one_linearised_step_would_overstretch():
+    # A horizontal sheet falling at 3 m/s past a pinned corner: one 0.04 s linearised step swings
+    # the edges at the pin along their tangent, θ = |Δx| / length ≫ 1, lengthening them by √(1 + θ²).
+    from tailor.integrators import ImplicitEuler
+    from tailor.sim import face_stretch
+
+    model, x0 = sheet(20, 20, 0.02, "cotton", vertical=False)
+    model = model.with_pins([int(np.argmin(x0[:, 0] + x0[:, 1]))])
+    v0 = np.where(model.vertex_pinned[:, None], 0.0, [0.0, 0.0, -3.0])
+    state = model.state(x0, v0)
+    assert face_stretch(model, x0).max() == pytest.approx(1.0, abs=1e-9)
+
+    unchecked = ImplicitEuler(max_stretch_change=np.inf)
+    assert face_stretch(model, unchecked.step(model, state, 0.04, total_forces).x).max() > 2.0
+    assert unchecked.stretch_halvings == 0
+
+    checked = ImplicitEuler()
+    got = checked.step(model, state, 0.04, total_forces)
+    assert got.t == pytest.approx(0.04) and checked.stretch_halvings >= 1
+    assert face_stretch(model, got.x).max() < 1.0 + 2 * checked.max_stretch_change  # each half step within the bound

@@ -48,6 +48,15 @@ def deformation_gradient(model, x) -> np.ndarray:
     return np.stack([c1, c2], axis=2)
 
 
+def face_stretch(model, x) -> np.ndarray:
+    """Largest principal stretch of each triangle (1 = rest), shape (F,): the root of the larger
+    eigenvalue of the right Cauchy–Green tensor FᵀF."""
+    c1, c2 = _columns(model, x)
+    a, b, c = _dot(c1, c1), _dot(c2, c2), _dot(c1, c2)
+    half = 0.5 * (a + b)
+    return np.sqrt(half + np.sqrt(np.maximum(half * half - (a * b - c * c), 0.0)))
+
+
 def _dot(a, b):
     return np.einsum("ij,ij->i", a, b)
 
