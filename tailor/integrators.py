@@ -188,7 +188,7 @@ class ImplicitEuler:
     max_stretch_change : float
         A step that would stretch any triangle by more than this (principal stretch, above the
         larger of its start and rest) is also taken as two half steps, up to ``max_halvings``
-        deep (Baraff & Witkin 1998 §5.3's adaptive step: reject a step whose stretch changes too
+        deep (Baraff & Witkin 1998's adaptive step size: reject a step whose stretch changes too
         much). One linearised step rotates an edge about a held or stopped neighbour along the
         tangent, lengthening it by √(1 + θ²) for a rotation θ = |Δv|·Δt / length: cloth falling
         past a sphere's equator at 0.02–0.04 s steps was stretched 2–6× in one step (and the run
