@@ -112,7 +112,6 @@ SCENES = {
 
 QUICK_SCENES = ("sphere", "hang")
 """What ``tailor bench --quick`` runs by default (the garment scenes take minutes each)."""
-"""Reference scenes of the sweep by name."""
 
 
 def rest_error(ref_uv, ref_x, uv, x, ref_panel=None, panel=None):

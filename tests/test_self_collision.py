@@ -141,3 +141,18 @@ def test_edge_edge_crossing_is_caught():
     closing = 0.5 * (state.v[0, 2] + state.v[1, 2]) - (0.6 * state.v[3, 2] + 0.4 * state.v[4, 2])
     assert closing <= (0.004 - 0.003) / 0.01 + 1e-6
     np.testing.assert_allclose(state.v.sum(axis=0), v.sum(axis=0), atol=1e-12)
+
+
+def test_self_intersections_finds_crossings_and_ignores_neighbours():
+    # a strip of two triangles sharing an edge, folded flat onto itself (neighbours: not counted),
+    # and a separate triangle pierced by a third one just inside its edge (counted)
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1e-9, 0, 0], [0, 1, 1e-9]], float)
+    assert len(self_intersections(v, [[0, 1, 2], [3, 1, 4]])) == 0
+    tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    for inside in (0.3, 1e-3):  # the piercing edge passes this far inside the edge x = 0
+        pierce = np.array([[inside, 0.2, -0.5], [inside, 0.2, 0.5], [inside + 0.5, 3.0, 0.0]])
+        found = self_intersections(np.r_[tri, pierce], [[0, 1, 2], [3, 4, 5]])
+        assert found.tolist() == [[0, 1]]
+    apart = np.array([[-0.1, 0.2, -0.5], [-0.1, 0.2, 0.5], [-0.6, 3.0, 0.0]])  # outside the edge: no crossing
+    assert len(self_intersections(np.r_[tri, apart], [[0, 1, 2], [3, 4, 5]])) == 0
+    assert self_intersections(np.zeros((0, 3)), np.zeros((0, 3), int)).shape == (0, 2)
