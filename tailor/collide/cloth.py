@@ -80,6 +80,14 @@ MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 
 
+def _unique_ints(a):
+    """Sorted distinct values of a 1-D integer array, by one sort: NumPy 2.4's ``np.unique`` hashes
+    here and took 1.85 s for 2.3 M edge-pair keys (sorting: 0.04 s), a third of a fast-falling
+    drape's self-collision time."""
+    a = np.sort(a)
+    return a[np.r_[True, a[1:] != a[:-1]]] if len(a) else a
+
+
 @njit(cache=True)
 def _classify(gap, closing, travelled, thickness, reach):
     """Whether a pair at signed ``gap`` (positive on the side it was on) is a contact.
@@ -474,7 +482,7 @@ class SelfCollider:
         self._tri_near = np.zeros(0, bool)
         self._ee_near = np.zeros(0, bool)
         if len(faces):
-            verts = np.unique(self.faces[faces])
+            verts = _unique_ints(self.faces[faces].ravel())
             target = TriangleBoxes(x, self.faces[faces], BOX_CELL)
             point, local = clustered_query(x[verts], self.thickness + self._reach, target, cell=BOX_CELL)
             vertex, tri = verts[point], faces[local]
@@ -507,7 +515,7 @@ class SelfCollider:
         ea = np.repeat(self._ve_idx[self._ve_ptr[vertex][rep] + offset], 3)
         eb = self._face_edges[tri[rep]].ravel()
         ne = len(self._edges)
-        key = np.unique(np.minimum(ea, eb) * ne + np.maximum(ea, eb))
+        key = _unique_ints(np.minimum(ea, eb) * ne + np.maximum(ea, eb))
         ea, eb = self._edges[key // ne], self._edges[key % ne]
         shared = (ea[:, :, None] == eb[:, None, :]).any(axis=(1, 2))
         ea, eb = ea[~shared], eb[~shared]
