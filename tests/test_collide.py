@@ -1,6 +1,7 @@
 """Body contact helpers: trapped vertices go back out."""
 
 import numpy as np
+import pytest
 import trimesh
 
 from conftest import sheet
@@ -96,3 +97,18 @@ def test_clustered_query_finds_exactly_the_pairs_of_one_sphere_per_point():
         b = clustered_query(pts, radius, TriangleBoxes(body.vertices, body.faces, cell), cell=cell)
         assert len(a[0]) > len(pts)
         assert set(zip(*a)) == set(zip(*b))
+
+
+@pytest.mark.parametrize("scale", [0.5, 1e7])  # 1e7 m: cube indices too far apart for one integer key
+def test_points_are_clustered_by_cube_in_lexicographic_order(scale):
+    from tailor.collide.body import _cluster
+
+    points = np.random.default_rng(3).normal(0.0, scale, (4000, 3))
+    order, ptr, lo, hi = _cluster(points, 0.06)
+    assert np.array_equal(np.sort(order), np.arange(len(points)))
+    cubes = np.floor(points[order] / 0.06).astype(np.int64)
+    first = cubes[ptr[:-1]]
+    assert np.array_equal(np.repeat(first, np.diff(ptr), axis=0), cubes)  # one cube per cluster
+    assert all(tuple(a) < tuple(b) for a, b in zip(first[:-1], first[1:]))  # distinct, in order
+    assert np.array_equal(lo, np.minimum.reduceat(points[order], ptr[:-1])) and np.all(hi >= lo)
+    assert all(np.array_equal(order[s:e], np.sort(order[s:e])) for s, e in zip(ptr[:-1], ptr[1:]))  # stable

@@ -103,10 +103,22 @@ def sphere_query(points, radius, target, *, per_point: float = 64.0):
 
 def _cluster(points, cell):
     """(order, ptr, lo, hi): points binned into cubes of side ``cell``, as CSR over the occupied cubes."""
+    if not len(points):
+        return np.zeros(0, np.intp), np.zeros(1, np.intp), np.zeros((0, 3)), np.zeros((0, 3))
     key = np.floor(points / cell).astype(np.int64)
-    _, cluster, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    order = np.argsort(cluster.ravel(), kind="stable")
-    ptr = np.concatenate([[0], np.cumsum(counts)])
+    key -= key.min(axis=0)
+    span = key.max(axis=0) + 1
+    if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
+        # one integer per cube, in the cubes' lexicographic order: a 1-D stable sort (np.unique over
+        # rows sorts structured rows, 5 ms a call, a tenth of a walking T-shirt's drape)
+        flat = (key[:, 0] * span[1] + key[:, 1]) * span[2] + key[:, 2]
+        order = np.argsort(flat, kind="stable")
+        flat = flat[order]
+        ptr = np.append(np.flatnonzero(np.r_[True, flat[1:] != flat[:-1]]), len(flat))
+    else:  # exploded coordinates: cube indices too far apart for one integer
+        _, cluster, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+        order = np.argsort(cluster.ravel(), kind="stable")
+        ptr = np.concatenate([[0], np.cumsum(counts)])
     return order, ptr, np.minimum.reduceat(points[order], ptr[:-1], axis=0), np.maximum.reduceat(points[order], ptr[:-1], axis=0)
 
 
