@@ -25,7 +25,7 @@ from .mesh import GarmentMesh, discretise
 from .model import build_model
 from .pattern import Edge, Panel, Pattern
 from .integrators import Contacts, make_integrator
-from .sim import Guard, held_impulse, hold_contacts, simulate
+from .sim import Guard, halved_steps, held_impulse, hold_contacts, simulate
 
 __all__ = ["Setup", "sphere_drop", "two_corner_hang", "SPHERE_FABRIC", "rectangle", "grid", "sphere", "floor", "run_scene", "SceneResult", "cloth_model"]
 
@@ -180,8 +180,7 @@ class Setup:
                            dt=dt, thickness=self.thickness, friction=self.friction, self_collision=self_collision,
                            guard=guard, forces=forces, v0=v0, wind=wind)
         result.report["cg_iterations"] = int(getattr(integ, "total_iterations", 0))
-        result.report["halved_steps"] = {"unconverged": int(getattr(integ, "halvings", 0)),
-                                         "overstretch": int(getattr(integ, "stretch_halvings", 0))}
+        result.report["halved_steps"] = halved_steps(integ)
         return result
 
 

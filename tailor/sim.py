@@ -21,7 +21,7 @@ from .forces import total_forces
 from .forces.membrane import face_stretch
 from .integrators import Contacts, make_integrator
 
-__all__ = ["Quality", "QUALITY", "Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP", "held_impulse", "hold_contacts"]
+__all__ = ["Quality", "QUALITY", "Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP", "held_impulse", "hold_contacts", "halved_steps"]
 
 IMPLICIT_STEP = 0.01
 """Default step of the implicit integrator [s]: stable far beyond Eq. 24, four steps per 25 fps frame."""
@@ -180,6 +180,11 @@ def run(model, state, **kwargs):
     for _, final in simulate(model, state, **kwargs):  # noqa: B007 - the loop keeps the last state
         continue
     return final
+
+
+def halved_steps(integ) -> dict:
+    """How often an implicit integrator took a step as two halves, by cause (zeros for explicit ones)."""
+    return {"unconverged": int(getattr(integ, "halvings", 0)), "overstretch": int(getattr(integ, "stretch_halvings", 0))}
 
 
 def held_impulse(integ, model):

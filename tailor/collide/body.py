@@ -101,6 +101,11 @@ def sphere_query(points, radius, target, *, per_point: float = 64.0):
     return np.asarray(point, np.int64), np.asarray(tri, np.int64)
 
 
+def run_starts(a):
+    """Indices where a sorted 1-D array's runs of equal values begin."""
+    return np.flatnonzero(np.r_[True, a[1:] != a[:-1]])
+
+
 def _cluster(points, cell):
     """(order, ptr, lo, hi): points binned into cubes of side ``cell``, as CSR over the occupied cubes."""
     if not len(points):
@@ -114,7 +119,7 @@ def _cluster(points, cell):
         flat = (key[:, 0] * span[1] + key[:, 1]) * span[2] + key[:, 2]
         order = np.argsort(flat, kind="stable")
         flat = flat[order]
-        ptr = np.append(np.flatnonzero(np.r_[True, flat[1:] != flat[:-1]]), len(flat))
+        ptr = np.append(run_starts(flat), len(flat))
     else:  # exploded coordinates: cube indices too far apart for one integer
         _, cluster, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
         order = np.argsort(cluster.ravel(), kind="stable")
