@@ -9,7 +9,9 @@
 3. **transition** — a moving body that has a neutral pose (:attr:`~tailor.body.Body.rest`, as the
    shipped walk has) is dressed in that pose and then moves into its first frame in
    :data:`TRANSITION` seconds, so panels are never placed round a leg in mid-stride;
-4. **motion** — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
+4. **motion** — the body moves; one frame every 1/fps s, frame 0 being the dressed garment. Each
+   frame's step carries no body point that can reach the cloth within the frame more than half
+   the contact margin (the feet do not shorten a T-shirt's steps).
 
 Body contact (Eq. 9–14) acts in every phase through :class:`~tailor.collide.BodyCollider`, and
 panels rolled round one of a pair of limbs (trouser legs) keep to their side of the plane between
@@ -25,6 +27,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .collide import SELF_COLLISION_MODES, BodyCollider, SelfCollider, points_inside, self_intersections
 from .errors import SimulationError
@@ -84,6 +87,43 @@ STRAGGLER_REACH = 4.0
 """... pairs closer than this many mesh resolutions are merged where they are."""
 
 log = logging.getLogger(__name__)
+
+
+class _NearBodySpeed:
+    """The largest speed [m/s] of the body vertices that can reach the cloth within a frame.
+
+    Per body vertex, its speed over each interval of the motion (looping, as :meth:`Body.at`) and,
+    with a rest ``pose``, over the transition. A body vertex can touch the cloth within ``duration``
+    only if it is nearer than the contact margin plus how far both can travel meanwhile (the cloth
+    at up to twice its fastest vertex's speed plus 1 m/s) plus the longest body edge (a triangle
+    reaches that far from its corners); the others do not limit the step.
+    """
+
+    def __init__(self, body, pose, margin: float):
+        f = np.asarray(body.frames, dtype=np.float64)
+        self.speeds = np.linalg.norm(np.roll(f, -1, axis=0) - f, axis=2) * body.fps if len(f) > 1 else None
+        self.ease = None if pose is None else np.linalg.norm(f[0] - pose, axis=1) / TRANSITION
+        faces = np.asarray(body.faces)
+        self.edge = float(np.linalg.norm(f[0][faces] - f[0][np.roll(faces, 1, axis=1)], axis=2).max())
+        self.fps, self.margin = body.fps, margin
+
+    def __call__(self, x, v, body_x, duration: float, span) -> float:
+        """``span`` is (start, end) in the motion's time [s], or None during the transition."""
+        if span is None:
+            speed = self.ease
+        elif self.speeds is None:
+            return 0.0
+        else:
+            k0 = int(math.floor(span[0] * self.fps + 1e-9))
+            k1 = max(k0 + 1, int(math.ceil(span[1] * self.fps - 1e-9)))
+            speed = self.speeds[np.arange(k0, k1) % len(self.speeds)].max(axis=0)
+        if speed is None or not len(x):
+            return 0.0
+        cloth = float(np.sqrt((v * v).sum(axis=1).max())) if len(v) else 0.0
+        reach = self.margin + (float(speed.max()) + 2.0 * cloth + 1.0) * duration + self.edge
+        d, _ = cKDTree(x).query(body_x, distance_upper_bound=reach)
+        near = np.isfinite(d)
+        return float(speed[near].max()) if near.any() else 0.0
 
 
 @dataclass
@@ -404,6 +444,23 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     motion_dt = still_dt
     if body_speed > 0:
         motion_dt = min(still_dt or 0.01, 0.5 * collider.margin / body_speed)
+    # ... but only body points near the cloth count: a swinging hand or foot far from a T-shirt does
+    # not shorten its steps (per body vertex, its speed in each interval of the motion, looping, and
+    # during the transition)
+    near_speed = _NearBodySpeed(body, pose if keys else None, collider.margin) if body_speed > 0 else None
+    steps_used = []
+
+    def moving_step(state, duration):
+        """The step for the next ``duration`` s while the body moves (see ``near_speed``)."""
+        if near_speed is None:
+            return motion_dt
+        bx = body_state(state.t)[0]
+        start = sim["motion_start"]
+        span = None if start is None else (state.t - start, state.t - start + duration)
+        fastest = near_speed(state.x, state.v, bx, duration, span)
+        dt = min(still_dt or 0.01, 0.5 * collider.margin / fastest) if fastest > 0 else (still_dt or 0.01)
+        steps_used.append(dt)
+        return dt
 
     def advance(state, duration, rescue_after=True):
         """Simulate ``duration`` seconds on the current welded model; return the final state."""
@@ -418,7 +475,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         moving_now = sim["transition_start"] is not None
         guard = Guard(max_stretch=sim["motion_limit"]) if moving_now else Guard(max_stretch=SEWING_MAX_STRETCH)
         # sewing keeps the plain implicit step: the seams must move the panels far, and do
-        dt = motion_dt if moving_now else (still_dt if sim["gravity"] else None)
+        dt = moving_step(state, duration) if moving_now else (still_dt if sim["gravity"] else None)
         for _, last in simulate(sim["model"], state, duration=duration, frame_rate=1.0 / duration, integrator=integ,
                                 hooks=[hook], forces=forces, guard=guard, dt=dt):
             continue
@@ -587,7 +644,8 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         emit(state, bx)
         tell("motion", f + 1, frames, state)
     report["phases"]["motion"] = {"simulated_s": (frames - 1) / fps, "frames": frames, "wall_s": time.perf_counter() - t0,
-                                  "time_step_s": motion_dt, "time_step_still_s": still_dt, "body_max_speed_m_s": body_speed}
+                                  "time_step_s": motion_dt, "time_step_still_s": still_dt, "body_max_speed_m_s": body_speed,
+                                  "time_step_near_s": [min(steps_used), max(steps_used)] if steps_used else None}
     report["max_penetration_m_per_frame"] = penetration
     report["max_penetration_m"] = max(penetration) if penetration else 0.0
     report["self_intersections_per_frame"] = crossings  # intersecting triangle pairs (none sharing a vertex)
