@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .collide import SELF_COLLISION_MODES, BodyCollider, SelfCollider, points_inside, self_intersections
+from .collide import SELF_COLLISION_MODES, BodyCollider, InsideTest, SelfCollider, self_intersections
 from .errors import SimulationError
 from .fabric import Fabric, preset
 from .forces import total_forces
@@ -280,7 +280,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     pose = body.rest if has_rest else body.frames[0]
     keys = TRANSITION_KEYS if has_rest else 0
     landmarks = find_landmarks(pose, body.faces)
-    x0 = place_panels(pattern, mesh, landmarks, inside=lambda p: points_inside(p, pose, body.faces))
+    x0 = place_panels(pattern, mesh, landmarks, inside=InsideTest(pose, body.faces))
     walls = limb_walls(pattern, landmarks, pose)
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
     unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)

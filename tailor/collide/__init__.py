@@ -6,8 +6,8 @@ objects. Its PyPI build cannot refit a hierarchy, so a moving mesh is rebuilt; c
 a margin and reuse the candidates while nothing has moved further than it.
 """
 
-from .body import BodyCollider, TriangleBoxes, bvh_object, clustered_query, points_inside, self_intersections, sphere_query
+from .body import BodyCollider, InsideTest, TriangleBoxes, bvh_object, clustered_query, points_inside, self_intersections, sphere_query
 from .cloth import SELF_COLLISION_MODES, SelfCollider
 
-__all__ = ["BodyCollider", "SelfCollider", "SELF_COLLISION_MODES", "bvh_object", "points_inside",
+__all__ = ["BodyCollider", "SelfCollider", "SELF_COLLISION_MODES", "bvh_object", "points_inside", "InsideTest",
            "self_intersections", "sphere_query", "clustered_query", "TriangleBoxes"]

@@ -67,7 +67,7 @@ import scipy.sparse as sp
 from numba import njit, prange
 
 from ..errors import SimulationUnstable
-from .body import TriangleBoxes, boxes, clustered_query, manager_contacts, run_starts
+from .body import TriangleBoxes, boxes, clustered_query, corner_bounds, manager_contacts, run_starts
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
@@ -457,12 +457,13 @@ class SelfCollider:
         if self.mode == "on" or self.patch_count <= 1:
             return np.arange(len(self.faces))
         corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
-        lo = np.minimum.reduceat(corners.min(axis=1), self._starts)
-        hi = np.maximum.reduceat(corners.max(axis=1), self._starts)
+        lo, hi = corner_bounds(corners)
+        lo, hi = np.minimum.reduceat(lo, self._starts), np.maximum.reduceat(hi, self._starts)
         if previous is not None:
             before = previous[self.faces[self._order]]
-            lo = np.minimum(lo, np.minimum.reduceat(before.min(axis=1), self._starts))
-            hi = np.maximum(hi, np.maximum.reduceat(before.max(axis=1), self._starts))
+            b_lo, b_hi = corner_bounds(before)
+            lo = np.minimum(lo, np.minimum.reduceat(b_lo, self._starts))
+            hi = np.maximum(hi, np.maximum.reduceat(b_hi, self._starts))
         e1 = corners[:, 1] - corners[:, 0]
         e2 = corners[:, 2] - corners[:, 0]
         fn = np.cross(e1, e2)  # area-weighted normals
@@ -559,8 +560,8 @@ class SelfCollider:
         ends_a, ends_b = self._edges[ka], self._edges[kb]
         shared = (ends_a[:, :, None] == ends_b[:, None, :]).any(axis=(1, 2))
         # only edges that come within the query radius: the candidates' other edge pairs are far apart
-        lo = np.minimum(x, xp)[self._edges].min(axis=1)  # each edge's swept box
-        hi = np.maximum(x, xp)[self._edges].max(axis=1)
+        lo = corner_bounds(np.minimum(x, xp)[self._edges])[0]  # each edge's swept box
+        hi = corner_bounds(np.maximum(x, xp)[self._edges])[1]
         keep = np.flatnonzero(~shared)
         close = _boxes_within(lo, hi, ka[keep], kb[keep], radius)
         ea, eb = ends_a[keep[close]], ends_b[keep[close]]
