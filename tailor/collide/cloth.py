@@ -20,7 +20,7 @@ threshold distance from the cloth's vertices") runs in three stages:
    for cloth falling or swinging as a whole: an earlier query radius of ``margin`` plus twice the
    step's largest displacement relative to the centroid (a pair that crossed lies no deeper)
    grew to 9 cm on a cloth draping over a sphere, 1.4 M edge pairs (now 61 k), and the 48 × 48
-   sphere with self-collision ``auto`` at ``normal`` took 48–87 s (now 8 s; 3 s without).
+   sphere with self-collision ``auto`` at ``normal`` took 42–50 s (now 7–9.5 s; 3 s without).
 3. **Narrow phase** (compiled): a vertex whose projection falls on a candidate triangle not at the
    vertex is a contact if it is nearer than ``thickness``, if its velocity would bring it nearer
    within the next step, or if it crossed the triangle's plane since the last step (judged by the
