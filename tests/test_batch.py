@@ -141,7 +141,7 @@ def test_batch_records_the_broken_job_resumes_and_matches_one_by_one(tmp_path, c
 def test_killing_the_batch_command_and_rerunning_loses_only_running_jobs(tmp_path):
     # a small first job finishes while the second runs; the kill lands in the second
     spec = {"defaults": QUICK, "jobs": [{"pattern": str(PANELS / "flag.json"), "resolution": 25},
-                                        {"pattern": str(PANELS / "skirt.json")},
+                                        {"pattern": str(PANELS / "skirt.json"), "resolution": 12},
                                         {"pattern": str(PANELS / "flag.json"), "resolution": 20}]}
     (tmp_path / "jobs.json").write_text(json.dumps(spec))
     out = tmp_path / "out"

@@ -341,8 +341,8 @@ def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
 def test_an_explicit_integrator_follows_the_walking_body():
     # explicit integrators keep their Eq. 24 step while the body moves (they were handed the
     # implicit integrator's 7 ms motion step and diverged at the first walking frame)
-    result = drape(read_pattern(PANELS / "skirt.json"), read_body("mannequin-walk"), frames=2, resolution=0.08,
+    result = drape(read_pattern(PANELS / "skirt.json"), read_body("mannequin-walk"), frames=2, resolution=0.12,
                    integrator="symplectic", settle=0.2)
     assert all(np.isfinite(f).all() for f in result.frames)
     assert max(result.report["max_penetration_m_per_frame"]) <= 0.002
-    assert result.report["steps"] > 1000  # Eq. 24 steps: a fraction of a millisecond at 8 cm
+    assert result.report["steps"] > 1000  # Eq. 24 steps: about a millisecond at 12 cm
