@@ -21,7 +21,7 @@ from tailor.io.obj import read_obj_vertices
 
 distributed = pytest.importorskip("distributed")
 
-QUICK = {"frames": 2, "resolution": 8, "quality": "draft"}
+QUICK = {"frames": 2, "resolution": 12, "quality": "draft"}
 
 
 def _jobs(tmp_path):
