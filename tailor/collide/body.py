@@ -154,19 +154,19 @@ class TriangleBoxes:
 
     The target side of :func:`clustered_query`: per triangle its bounding box, per cube the box
     round its triangles, in an FCL dynamic AABB tree. Build one per body frame (or cloth state).
-    With ``previous`` vertex positions the boxes are swept: each holds its triangle at both.
+    With ``vertex_boxes`` (lo, hi), each (V, 3), a box per vertex (where it is over a step, say),
+    each triangle's box is the one round its corners' boxes.
     """
 
-    def __init__(self, vertices, faces, cell: float = 0.06, previous=None):
+    def __init__(self, vertices, faces, cell: float = 0.06, vertex_boxes=None):
         faces = np.asarray(faces, dtype=np.int64)
         corners = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64)[faces])
         self.corners = corners
-        self.lo, self.hi = corner_bounds(corners)
-        if previous is not None:
-            before = np.asarray(previous, dtype=np.float64)[faces]
-            lo, hi = corner_bounds(before)
-            self.lo, self.hi = np.minimum(self.lo, lo), np.maximum(self.hi, hi)
-        self.swept = previous is not None
+        if vertex_boxes is None:
+            self.lo, self.hi = corner_bounds(corners)
+        else:
+            self.lo, self.hi = corner_bounds(vertex_boxes[0][faces])[0], corner_bounds(vertex_boxes[1][faces])[1]
+        self.swept = vertex_boxes is not None
         self.order, self.ptr = np.zeros(0, np.int64), np.zeros(1, np.int64)
         self.manager, self.index = None, {}
         if not len(corners):
@@ -184,7 +184,7 @@ class TriangleBoxes:
         return len(self.lo)
 
 
-def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = 0.06, previous=None):
+def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = 0.06, point_boxes=None):
     """(point, triangle) index pairs of ``target``'s triangles within ``radius`` of each point (FCL, by clusters).
 
     The FCL broad phase by clusters on both sides. python-fcl builds one Python object per
@@ -198,17 +198,14 @@ def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = 0.06
     2 cm: 67.0 k pairs in 35–70 ms against 350 ms, and 25 ms to build the boxes against 58 ms
     for the hierarchy; 6 cm cubes).
 
-    Swept (``previous`` positions of the points, and a swept ``target``): the pairs whose boxes,
-    each holding its point or triangle at both times, come within ``radius`` — a superset of the
-    pairs that come that near at any moment of straight-line motion between the two.
+    With ``point_boxes`` (lo, hi) round the points and a ``target`` built with vertex boxes (each
+    box holding where its point or vertex is over a step): the pairs whose boxes come within
+    ``radius`` — a superset of the pairs that come that near at any moment in them.
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     if not len(points) or not len(target):
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    lo = hi = points
-    if previous is not None:
-        previous = np.asarray(previous, dtype=np.float64)
-        lo, hi = np.minimum(points, previous), np.maximum(points, previous)
+    lo, hi = (points, points) if point_boxes is None else point_boxes
     p_order, p_ptr, _, _ = _cluster(points, cell)
     p_lo = np.minimum.reduceat(lo[p_order], p_ptr[:-1], axis=0)
     p_hi = np.maximum.reduceat(hi[p_order], p_ptr[:-1], axis=0)
@@ -218,7 +215,7 @@ def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = 0.06
     for k, c in enumerate(contacts):
         a = mine.get(id(c.o1))
         pairs[k] = (a, theirs[id(c.o2)]) if a is not None else (mine[id(c.o2)], theirs[id(c.o1)])
-    exact = previous is None and not target.swept
+    exact = point_boxes is None and not target.swept
     return _expand_boxes(pairs, p_ptr, p_order.astype(np.int64), target.ptr, target.order, np.ascontiguousarray(lo),
                          np.ascontiguousarray(hi), target.lo, target.hi, target.corners, float(radius), exact)
 

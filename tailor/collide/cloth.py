@@ -267,13 +267,18 @@ def _detect_edges_serial(x, xp, vel, dt, pairs, near, thickness, reach, out_i, o
 
 
 @njit(cache=True)
-def _boxes_within(lo, hi, a, b, limit):
-    """Whether boxes ``a[k]`` and ``b[k]`` (rows of ``lo``/``hi``) come within ``limit`` of each other."""
+def _sweptwithin(lo, hi, edges, a, b, limit):
+    """Whether the boxes of edges ``a[k]`` and ``b[k]`` (round their ends' boxes ``lo``/``hi``) come
+    within ``limit`` of each other."""
     out = np.zeros(len(a), np.bool_)
     for k in range(len(a)):
         d2 = 0.0
         for q in range(3):
-            g = max(lo[b[k], q] - hi[a[k], q], 0.0, lo[a[k], q] - hi[b[k], q])
+            a_lo = min(lo[edges[a[k], 0], q], lo[edges[a[k], 1], q])
+            a_hi = max(hi[edges[a[k], 0], q], hi[edges[a[k], 1], q])
+            b_lo = min(lo[edges[b[k], 0], q], lo[edges[b[k], 1], q])
+            b_hi = max(hi[edges[b[k], 0], q], hi[edges[b[k], 1], q])
+            g = max(b_lo - a_hi, 0.0, a_lo - b_hi)
             d2 += g * g
         out[k] = d2 <= limit * limit
     return out
@@ -451,19 +456,18 @@ class SelfCollider:
         a2 = (a @ a).tocoo()
         self._adjacent = np.unique(a2.row.astype(np.int64) * self.patch_count + a2.col)
 
-    def active_faces(self, x, previous=None):
-        """Faces of the patches that can touch themselves or one another (``auto``), at ``x`` or
-        anywhere on the way from ``previous`` to it."""
+    def active_faces(self, x, vertex_boxes=None):
+        """Faces of the patches that can touch themselves or one another (``auto``), at ``x`` or,
+        with ``vertex_boxes`` (lo, hi) per vertex, anywhere in them."""
         if self.mode == "on" or self.patch_count <= 1:
             return np.arange(len(self.faces))
         corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
-        lo, hi = corner_bounds(corners)
+        if vertex_boxes is None:
+            lo, hi = corner_bounds(corners)
+        else:
+            lo = corner_bounds(vertex_boxes[0][self.faces[self._order]])[0]
+            hi = corner_bounds(vertex_boxes[1][self.faces[self._order]])[1]
         lo, hi = np.minimum.reduceat(lo, self._starts), np.maximum.reduceat(hi, self._starts)
-        if previous is not None:
-            before = previous[self.faces[self._order]]
-            b_lo, b_hi = corner_bounds(before)
-            lo = np.minimum(lo, np.minimum.reduceat(b_lo, self._starts))
-            hi = np.maximum(hi, np.maximum.reduceat(b_hi, self._starts))
         e1 = corners[:, 1] - corners[:, 0]
         e2 = corners[:, 2] - corners[:, 0]
         fn = np.cross(e1, e2)  # area-weighted normals
@@ -513,7 +517,8 @@ class SelfCollider:
         t0 = time.perf_counter()
         self._reach = self.margin + (2.0 * step if math.isfinite(step) else 0.0)
         radius = self.thickness + self.margin
-        faces = self.active_faces(x, xp)
+        swept = None if xp is None else (np.minimum(x, xp), np.maximum(x, xp))  # each vertex's box over the step
+        faces = self.active_faces(x, swept)
         self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
         self._ee = np.zeros((0, 4), np.int64)
@@ -521,9 +526,9 @@ class SelfCollider:
         self._ee_near = np.zeros(0, bool)
         if len(faces):
             verts = _unique_ints(self.faces[faces].ravel())
-            target = TriangleBoxes(x, self.faces[faces], self.cell, previous=xp)
+            target = TriangleBoxes(x, self.faces[faces], self.cell, vertex_boxes=swept)
             point, local = clustered_query(x[verts], radius, target, cell=self.cell,
-                                           previous=None if xp is None else xp[verts])
+                                           point_boxes=None if swept is None else (swept[0][verts], swept[1][verts]))
             vertex, tri = verts[point], faces[local]
             # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
             # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
@@ -536,17 +541,17 @@ class SelfCollider:
             self._vtx = np.ascontiguousarray(vertex, dtype=np.int64)
             self._tri = tri
             if self.edges:
-                self._ee, self._ee_near = self._edge_pairs(x, x if xp is None else xp, vertex, tri, radius)
+                self._ee, self._ee_near = self._edge_pairs((x, x) if swept is None else swept, vertex, tri, radius)
             self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
             self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self._anchor = x.copy()
         self.stats["queries"] += 1
         self.stats["query_s"] += time.perf_counter() - t0
 
-    def _edge_pairs(self, x, xp, vertex, tri, radius):
+    def _edge_pairs(self, vertex_boxes, vertex, tri, radius):
         """Edge–edge candidates (E, 4): every edge at a candidate vertex against the candidate triangle's
-        edges, without pairs sharing an end, whose boxes swept from ``xp`` to ``x`` come within
-        ``radius``; and whether their ends are 1-ring neighbours."""
+        edges, without pairs sharing an end, whose boxes (round their ends' ``vertex_boxes``) come
+        within ``radius``; and whether their ends are 1-ring neighbours."""
         deg = np.diff(self._ve_ptr)[vertex]
         if not deg.sum():
             return np.zeros((0, 4), np.int64), np.zeros(0, bool)
@@ -560,10 +565,9 @@ class SelfCollider:
         ends_a, ends_b = self._edges[ka], self._edges[kb]
         shared = (ends_a[:, :, None] == ends_b[:, None, :]).any(axis=(1, 2))
         # only edges that come within the query radius: the candidates' other edge pairs are far apart
-        lo = corner_bounds(np.minimum(x, xp)[self._edges])[0]  # each edge's swept box
-        hi = corner_bounds(np.maximum(x, xp)[self._edges])[1]
         keep = np.flatnonzero(~shared)
-        close = _boxes_within(lo, hi, ka[keep], kb[keep], radius)
+        lo, hi = vertex_boxes
+        close = _sweptwithin(lo, hi, self._edges, ka[keep], kb[keep], radius)
         ea, eb = ends_a[keep[close]], ends_b[keep[close]]
         near = self._is_ring(ea[:, :, None], eb[:, None, :]).any(axis=(1, 2))
         return np.ascontiguousarray(np.column_stack([ea, eb]), dtype=np.int64), near
