@@ -24,7 +24,7 @@ import numpy as np
 
 from .errors import SimulationUnstable
 from .forces.external import air_damping
-from .forces.jacobian import SparsePattern, jacobian_data
+from .forces.jacobian import SparsePattern, implicit_blocks
 from .forces.kernels import block_pcg, bsr_matvec, inverse_3x3
 from .forces.membrane import face_stretch
 from .model import State
@@ -304,25 +304,26 @@ class ImplicitEuler:
         pattern = self._pattern_for(model)
         n = model.vertex_count
         f = forces(model, state).reshape(-1)
-        kdata, cdata = jacobian_data(model, state, pattern)
-        m = np.repeat(model.vertex_mass, 3)
+        blocks, kv = implicit_blocks(model, state, pattern, dt)
+        m = model.vertex_mass
         free = np.repeat(~model.vertex_pinned, 3)
         v = state.v.reshape(-1)
-        rhs = dt * (f - dt * (pattern.csr(kdata) @ v))
-        data = dt * cdata + (dt * dt) * kdata
-        data[pattern.diagonal_slots] += m
-        if not free.all():  # pinned dofs: Δv = 0 (their rows and columns become the identity)
-            data[~(free[pattern.rows] & free[pattern.cols])] = 0.0
-            data[pattern.diagonal_slots[~free]] = 1.0
+        rhs = dt * (f - dt * kv.reshape(-1))
+        diagonal = pattern.diagonal_block_index
+        for a in range(3):
+            blocks[diagonal, a, a] += m
+        if not free.all():  # pinned vertices: Δv = 0 (their block rows and columns become the identity)
+            pinned = model.vertex_pinned
+            blocks[pinned[pattern.block_rows] | pinned[pattern.block_cols]] = 0.0
+            blocks[diagonal[pinned]] = np.eye(3)
             rhs[~free] = 0.0
         # warm start: last step's Δv, or the explicit Euler estimate Δt·f/m on the first step
         if self._warm is not None and len(self._warm) == 3 * n:
             dv = self._warm.copy()
         else:
-            dv = dt * f / m * free
+            dv = dt * f / np.repeat(m, 3) * free
         carried = self.contacts
         held = self._held(model)
-        blocks = pattern.blocks(data)
         if model.air_density > 0.0:  # air drag and wind, implicitly (lumped on the diagonal blocks)
             drag = air_damping(model, state, self.wind)
             drag[model.vertex_pinned] = 0.0

@@ -19,10 +19,10 @@ import scipy.sparse as sp
 
 from ..geometry import hinge_angle_gradients
 from .kawabata import secant_hinge_stiffness, secant_membrane_stiffness
-from .kernels import bending_jacobian_into, membrane_jacobian_into
+from .kernels import bending_jacobian_into, bending_system_into, element_colors, membrane_jacobian_into, membrane_system_into
 from .membrane import membrane_gradients
 
-__all__ = ["SparsePattern", "force_jacobians", "jacobian_data", "jacobian_blocks"]
+__all__ = ["SparsePattern", "force_jacobians", "jacobian_data", "jacobian_blocks", "implicit_blocks"]
 
 
 class SparsePattern:
@@ -66,18 +66,34 @@ class SparsePattern:
         self._diag_block = inverse[-nv:]  # the identity keys came last
         self.diagonal_slots = slots[self._diag_block][:, a3, a3].reshape(-1)
         """CSR slot of each diagonal entry (dof order)."""
-        self.positions, start = [], 0
+        self.positions, self.element_blocks, start = [], [], 0
         for g in groups:  # slot of every entry of every element's (3k × 3k) block
             e, k = g.shape
             p = inverse[start : start + e * k * k].reshape(e, k, k)
             start += e * k * k
             self.positions.append(slots[p].transpose(0, 1, 3, 2, 4).reshape(e, 9 * k * k).astype(np.int64))
+            self.element_blocks.append(np.ascontiguousarray(p, dtype=np.int64))
         """Per element group (faces or springs, then hinges, then pairs): CSR slot of each block entry, (E, (3k)²)."""
+        self.block_rows = bi.astype(np.int64)
+        """Row (vertex) of every 3×3 block, in :meth:`blocks` order."""
+        self._groups = groups
+        self._colors = [None] * len(groups)
         self.scatter = np.concatenate([pos.reshape(-1) for pos in self.positions] + [self.diagonal_slots])
+
+    def colors(self, group: int):
+        """(order, ptr) of element group ``group`` in classes that share no vertex (:func:`element_colors`), made once."""
+        if self._colors[group] is None:
+            self._colors[group] = element_colors(self._groups[group], self.shape[0] // 3)
+        return self._colors[group]
 
     def blocks(self, data) -> np.ndarray:
         """The stored values as 3×3 blocks (B, 3, 3) in the order of ``block_indptr``/``block_cols``."""
         return data[self._block_slots].reshape(-1, 3, 3)
+
+    @property
+    def diagonal_block_index(self) -> np.ndarray:
+        """(N,) index, in :meth:`blocks` order, of every vertex's own block."""
+        return self._diag_block
 
     def diagonal_blocks(self, blocks) -> np.ndarray:
         """(N, 3, 3) diagonal block of every vertex row."""
@@ -148,6 +164,39 @@ def _add_pair_blocks(model, positions, kdata, cdata):
     block = np.einsum("ab,ij->aibj", np.array([[1.0, -1.0], [-1.0, 1.0]]), np.eye(3)).reshape(36)
     np.add.at(kdata, positions.reshape(-1), (model.pair_stiffness[:, None] * block).reshape(-1))
     np.add.at(cdata, positions.reshape(-1), (model.pair_damping[:, None] * block).reshape(-1))
+
+
+def implicit_blocks(model, state, pattern: SparsePattern, dt: float):
+    """(Δt·C + Δt²·K as 3×3 blocks (B, 3, 3) in ``pattern``'s block order, K·v (N, 3)).
+
+    What an implicit step needs of the Jacobians, assembled straight into block form: faces and
+    hinges by compiled kernels, one colour class of elements at a time in parallel (the sums in
+    the same order on any thread count), seam pairs by numpy; Walker's springs through
+    :func:`jacobian_data`. Equals that function's K and C to round-off (the order of the sums differs).
+    """
+    v = state.v
+    if model.elastic == "springs":
+        kdata, cdata = jacobian_data(model, state, pattern)
+        return pattern.blocks(dt * cdata + (dt * dt) * kdata), (pattern.csr(kdata) @ v.reshape(-1)).reshape(-1, 3)
+    blocks = np.zeros((len(pattern.block_cols), 3, 3))
+    kv = np.zeros((model.vertex_count, 3))
+    membrane_system_into(model, state, pattern.element_blocks[0], pattern.colors(0), dt, blocks, kv,
+                         stiffness=secant_membrane_stiffness(model, state.x) if model.strain_dependent else None)
+    if model.has_bending:
+        bending_system_into(model, state, pattern.element_blocks[1], pattern.colors(1), dt, blocks, kv,
+                            stiffness=secant_hinge_stiffness(model, state.x) if model.has_curves else None)
+    if pattern.has_pairs:
+        i, j = np.asarray(model.pair_vertices).T
+        k, c = np.asarray(model.pair_stiffness, float), np.asarray(model.pair_damping, float)
+        slots = pattern.element_blocks[-1]  # (P, 2, 2)
+        eye = np.eye(3)
+        w = (dt * c + dt * dt * k)[:, None, None] * eye
+        for a, b, sign in ((0, 0, 1.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 1.0)):
+            np.add.at(blocks, slots[:, a, b], sign * w)
+        pull = k[:, None] * (v[i] - v[j])
+        np.add.at(kv, i, pull)
+        np.add.at(kv, j, -pull)
+    return blocks, kv
 
 
 def force_jacobians(model, state, pattern: SparsePattern):

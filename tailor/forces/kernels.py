@@ -18,6 +18,9 @@ __all__ = [
     "bending_forces_into",
     "membrane_jacobian_into",
     "bending_jacobian_into",
+    "membrane_system_into",
+    "bending_system_into",
+    "element_colors",
     "bsr_matvec",
     "block_pcg",
     "inverse_3x3",
@@ -163,97 +166,216 @@ def bending_forces_into(model, state, out, *, stiffness=None) -> None:
         _bending_range(*args, 0, n)
 
 
+@njit(cache=True, inline="always")
+def _membrane_face(f, x, faces, dm, area, k1, k2, k12, p1, p2, p12, g, kf, cf):
+    """Face f's 9×9 stiffness (Gauss–Newton + clamped geometric) and damping blocks, into kf, cf."""
+    i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+    a00, a01, a10, a11 = dm[f, 0, 0], dm[f, 0, 1], dm[f, 1, 0], dm[f, 1, 1]
+    w1 = (-(a00 + a10), a00, a10)
+    w2 = (-(a01 + a11), a01, a11)
+    c1x = (x[i1, 0] - x[i0, 0]) * a00 + (x[i2, 0] - x[i0, 0]) * a10
+    c1y = (x[i1, 1] - x[i0, 1]) * a00 + (x[i2, 1] - x[i0, 1]) * a10
+    c1z = (x[i1, 2] - x[i0, 2]) * a00 + (x[i2, 2] - x[i0, 2]) * a10
+    c2x = (x[i1, 0] - x[i0, 0]) * a01 + (x[i2, 0] - x[i0, 0]) * a11
+    c2y = (x[i1, 1] - x[i0, 1]) * a01 + (x[i2, 1] - x[i0, 1]) * a11
+    c2z = (x[i1, 2] - x[i0, 2]) * a01 + (x[i2, 2] - x[i0, 2]) * a11
+    c1 = (c1x, c1y, c1z)
+    c2 = (c2x, c2y, c2z)
+    for a in range(3):
+        for k in range(3):
+            g[0, 3 * a + k] = w1[a] * c1[k]
+            g[1, 3 * a + k] = w2[a] * c2[k]
+            g[2, 3 * a + k] = 0.5 * (w1[a] * c2[k] + w2[a] * c1[k])
+    s11 = k1[f] * 0.5 * (c1x * c1x + c1y * c1y + c1z * c1z - 1.0)
+    s22 = k2[f] * 0.5 * (c2x * c2x + c2y * c2y + c2z * c2z - 1.0)
+    s12 = k12[f] * 0.5 * (c1x * c2x + c1y * c2y + c1z * c2z)
+    # positive part of the 2×2 stress (closed-form eigen-decomposition)
+    half_tr = 0.5 * (s11 + s22)
+    rad = math.sqrt(0.25 * (s11 - s22) ** 2 + s12 * s12)
+    l1, l2 = half_tr + rad, half_tr - rad
+    if rad > 0.0:
+        if abs(s12) > 1e-300:
+            v1x, v1y = l1 - s22, s12
+        elif s11 >= s22:
+            v1x, v1y = 1.0, 0.0
+        else:
+            v1x, v1y = 0.0, 1.0
+        nrm = math.sqrt(v1x * v1x + v1y * v1y)
+        v1x, v1y = v1x / nrm, v1y / nrm
+    else:
+        v1x, v1y = 1.0, 0.0
+    v2x, v2y = -v1y, v1x
+    l1p, l2p = max(l1, 0.0), max(l2, 0.0)
+    q11 = l1p * v1x * v1x + l2p * v2x * v2x
+    q22 = l1p * v1y * v1y + l2p * v2y * v2y
+    q12 = l1p * v1x * v1y + l2p * v2x * v2y
+    ar = area[f]
+    ck0, ck1, ck2 = k1[f] * ar, k2[f] * ar, 2.0 * k12[f] * ar
+    cc0, cc1, cc2 = p1[f] * ar, p2[f] * ar, 2.0 * p12[f] * ar
+    for r in range(9):
+        for c in range(9):
+            kv = ck0 * g[0, r] * g[0, c] + ck1 * g[1, r] * g[1, c] + ck2 * g[2, r] * g[2, c]
+            cf[r, c] = cc0 * g[0, r] * g[0, c] + cc1 * g[1, r] * g[1, c] + cc2 * g[2, r] * g[2, c]
+            if r % 3 == c % 3:
+                ra, cb = r // 3, c // 3
+                kv += ar * (w1[ra] * (q11 * w1[cb] + q12 * w2[cb]) + w2[ra] * (q12 * w1[cb] + q22 * w2[cb]))
+            kf[r, c] = kv
+
+
 @njit(cache=True)
 def _membrane_jacobian(x, faces, dm, area, k1, k2, k12, p1, p2, p12, pos, kdata, cdata):
-    """Scatter each face's 9×9 stiffness (Gauss–Newton + clamped geometric) and damping blocks."""
+    """Scatter each face's 9×9 stiffness and damping blocks into CSR data (the reference layout)."""
     g = np.empty((3, 9))
+    kf = np.empty((9, 9))
+    cf = np.empty((9, 9))
     for f in range(faces.shape[0]):
-        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
-        a00, a01, a10, a11 = dm[f, 0, 0], dm[f, 0, 1], dm[f, 1, 0], dm[f, 1, 1]
-        w1 = (-(a00 + a10), a00, a10)
-        w2 = (-(a01 + a11), a01, a11)
-        c1 = np.empty(3)
-        c2 = np.empty(3)
-        for k in range(3):
-            d1 = x[i1, k] - x[i0, k]
-            d2 = x[i2, k] - x[i0, k]
-            c1[k] = d1 * a00 + d2 * a10
-            c2[k] = d1 * a01 + d2 * a11
-        for a in range(3):
-            for k in range(3):
-                g[0, 3 * a + k] = w1[a] * c1[k]
-                g[1, 3 * a + k] = w2[a] * c2[k]
-                g[2, 3 * a + k] = 0.5 * (w1[a] * c2[k] + w2[a] * c1[k])
-        s11 = k1[f] * 0.5 * (c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2] - 1.0)
-        s22 = k2[f] * 0.5 * (c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2] - 1.0)
-        s12 = k12[f] * 0.5 * (c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2])
-        # positive part of the 2×2 stress (closed-form eigen-decomposition)
-        half_tr = 0.5 * (s11 + s22)
-        rad = math.sqrt(0.25 * (s11 - s22) ** 2 + s12 * s12)
-        l1, l2 = half_tr + rad, half_tr - rad
-        if rad > 0.0:
-            if abs(s12) > 1e-300:
-                v1x, v1y = l1 - s22, s12
-            elif s11 >= s22:
-                v1x, v1y = 1.0, 0.0
-            else:
-                v1x, v1y = 0.0, 1.0
-            nrm = math.sqrt(v1x * v1x + v1y * v1y)
-            v1x, v1y = v1x / nrm, v1y / nrm
-        else:
-            v1x, v1y = 1.0, 0.0
-        v2x, v2y = -v1y, v1x
-        l1p, l2p = max(l1, 0.0), max(l2, 0.0)
-        q11 = l1p * v1x * v1x + l2p * v2x * v2x
-        q22 = l1p * v1y * v1y + l2p * v2y * v2y
-        q12 = l1p * v1x * v1y + l2p * v2x * v2y
-        ar = area[f]
-        ck = (k1[f] * ar, k2[f] * ar, 2.0 * k12[f] * ar)
-        cc = (p1[f] * ar, p2[f] * ar, 2.0 * p12[f] * ar)
+        _membrane_face(f, x, faces, dm, area, k1, k2, k12, p1, p2, p12, g, kf, cf)
         for r in range(9):
             for c in range(9):
-                kv = ck[0] * g[0, r] * g[0, c] + ck[1] * g[1, r] * g[1, c] + ck[2] * g[2, r] * g[2, c]
-                cv = cc[0] * g[0, r] * g[0, c] + cc[1] * g[1, r] * g[1, c] + cc[2] * g[2, r] * g[2, c]
-                if r % 3 == c % 3:
-                    ra, cb = r // 3, c // 3
-                    kv += ar * (w1[ra] * (q11 * w1[cb] + q12 * w2[cb]) + w2[ra] * (q12 * w1[cb] + q22 * w2[cb]))
                 p = pos[f, 9 * r + c]
-                kdata[p] += kv
-                cdata[p] += cv
+                kdata[p] += kf[r, c]
+                cdata[p] += cf[r, c]
+
+
+@njit(cache=True, inline="always")
+def _add_element(e, nodes, slots, kf, cf, damped, v, dt, blocks, kv):
+    """blocks += Δt·C_e + Δt²·K_e (C_e = ``cf`` if ``damped``) and kv += K_e·v over element e's vertex pairs."""
+    k = nodes.shape[1]
+    dt2 = dt * dt
+    for a in range(k):
+        ia = nodes[e, a]
+        for b in range(k):
+            ib = nodes[e, b]
+            s = slots[e, a, b]
+            for r in range(3):
+                acc = 0.0
+                for c in range(3):
+                    kk = kf[3 * a + r, 3 * b + c]
+                    if damped:
+                        blocks[s, r, c] += dt * cf[3 * a + r, 3 * b + c] + dt2 * kk
+                    else:
+                        blocks[s, r, c] += dt2 * kk
+                    acc += kk * v[ib, c]
+                kv[ia, r] += acc
+
+
+@njit(cache=True, parallel=True)
+def _membrane_system(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, slots, order, cptr, dt, blocks, kv):
+    """Faces' Δt·C + Δt²·K into 3×3 blocks and K·v, one colour class of faces at a time.
+
+    No two faces of a class share a vertex, so a class runs in parallel without write conflicts
+    and every block sums its faces in one order (the class order) on any thread count.
+    """
+    for col in range(len(cptr) - 1):
+        for t in prange(cptr[col], cptr[col + 1]):
+            g = np.empty((3, 9))
+            kf = np.empty((9, 9))
+            cf = np.empty((9, 9))
+            f = order[t]
+            _membrane_face(f, x, faces, dm, area, k1, k2, k12, p1, p2, p12, g, kf, cf)
+            _add_element(f, faces, slots, kf, cf, True, v, dt, blocks, kv)
+
+
+@njit(cache=True, inline="always")
+def _hinge_gradient(h, x, hinges, g):
+    """∇θ of hinge h into g (12,); False for a degenerate hinge (no bending stiffness then)."""
+    j0, j1, j2, j3 = hinges[h, 0], hinges[h, 1], hinges[h, 2], hinges[h, 3]
+    ex, ey, ez = x[j1, 0] - x[j0, 0], x[j1, 1] - x[j0, 1], x[j1, 2] - x[j0, 2]
+    ax, ay, az = x[j2, 0] - x[j0, 0], x[j2, 1] - x[j0, 1], x[j2, 2] - x[j0, 2]
+    bx, by, bz = x[j3, 0] - x[j1, 0], x[j3, 1] - x[j1, 1], x[j3, 2] - x[j1, 2]
+    n0 = (ey * az - ez * ay, ez * ax - ex * az, ex * ay - ey * ax)
+    n1 = (by * ez - bz * ey, bz * ex - bx * ez, bx * ey - by * ex)
+    el = math.sqrt(ex * ex + ey * ey + ez * ez)
+    nn0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]
+    nn1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]
+    if el == 0.0 or nn0 == 0.0 or nn1 == 0.0:
+        return False
+    ux, uy, uz = ex / el, ey / el, ez / el
+    a0 = ax * ux + ay * uy + az * uz
+    a1 = a0 - el
+    b1 = bx * ux + by * uy + bz * uz
+    b0 = b1 + el
+    for k in range(3):
+        q0 = n0[k] / nn0
+        q1 = n1[k] / nn1
+        g[k] = -a1 * q0 - b1 * q1
+        g[3 + k] = a0 * q0 + b0 * q1
+        g[6 + k] = -el * q0
+        g[9 + k] = -el * q1
+    return True
 
 
 @njit(cache=True)
 def _bending_jacobian(x, hinges, stiffness, pos, kdata):
-    """Scatter each hinge's 12×12 Gauss–Newton block k·∇θ∇θᵀ."""
+    """Scatter each hinge's 12×12 Gauss–Newton block k·∇θ∇θᵀ into CSR data (the reference layout)."""
     g = np.empty(12)
     for h in range(hinges.shape[0]):
-        j0, j1, j2, j3 = hinges[h, 0], hinges[h, 1], hinges[h, 2], hinges[h, 3]
-        ex, ey, ez = x[j1, 0] - x[j0, 0], x[j1, 1] - x[j0, 1], x[j1, 2] - x[j0, 2]
-        ax, ay, az = x[j2, 0] - x[j0, 0], x[j2, 1] - x[j0, 1], x[j2, 2] - x[j0, 2]
-        bx, by, bz = x[j3, 0] - x[j1, 0], x[j3, 1] - x[j1, 1], x[j3, 2] - x[j1, 2]
-        n0 = (ey * az - ez * ay, ez * ax - ex * az, ex * ay - ey * ax)
-        n1 = (by * ez - bz * ey, bz * ex - bx * ez, bx * ey - by * ex)
-        el = math.sqrt(ex * ex + ey * ey + ez * ez)
-        nn0 = n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]
-        nn1 = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]
-        if el == 0.0 or nn0 == 0.0 or nn1 == 0.0:
+        if not _hinge_gradient(h, x, hinges, g):
             continue
-        ux, uy, uz = ex / el, ey / el, ez / el
-        a0 = ax * ux + ay * uy + az * uz
-        a1 = a0 - el
-        b1 = bx * ux + by * uy + bz * uz
-        b0 = b1 + el
-        for k in range(3):
-            q0 = n0[k] / nn0
-            q1 = n1[k] / nn1
-            g[k] = -a1 * q0 - b1 * q1
-            g[3 + k] = a0 * q0 + b0 * q1
-            g[6 + k] = -el * q0
-            g[9 + k] = -el * q1
         kh = stiffness[h]
         for r in range(12):
             for c in range(12):
                 kdata[pos[h, 12 * r + c]] += kh * g[r] * g[c]
+
+
+@njit(cache=True, parallel=True)
+def _bending_system(x, v, hinges, stiffness, slots, order, cptr, dt, blocks, kv):
+    """Hinges' Δt²·k·∇θ∇θᵀ into 3×3 blocks and K·v = k·∇θ·(∇θ·v), one colour class of hinges at a time."""
+    dt2 = dt * dt
+    for col in range(len(cptr) - 1):
+        for t in prange(cptr[col], cptr[col + 1]):
+            g = np.empty(12)
+            h = order[t]
+            if not _hinge_gradient(h, x, hinges, g):
+                continue
+            kh = stiffness[h]
+            gv = 0.0
+            for a in range(4):
+                j = hinges[h, a]
+                gv += g[3 * a] * v[j, 0] + g[3 * a + 1] * v[j, 1] + g[3 * a + 2] * v[j, 2]
+            for a in range(4):
+                ia = hinges[h, a]
+                for r in range(3):
+                    kv[ia, r] += kh * g[3 * a + r] * gv
+                    w = dt2 * kh * g[3 * a + r]
+                    for b in range(4):
+                        s = slots[h, a, b]
+                        for c in range(3):
+                            blocks[s, r, c] += w * g[3 * b + c]
+
+
+@njit(cache=True)
+def element_colors(nodes, vertex_count):
+    """(order, ptr): elements (rows of vertex ids) in classes none of whose elements share a vertex;
+    class c is ``order[ptr[c]:ptr[c+1]]``, in increasing element order. Greedy over at most 64
+    classes (vertex bit masks); an element that would need a 65th gets a class of its own."""
+    masks = np.zeros(vertex_count, np.uint64)
+    color = np.empty(len(nodes), np.int64)
+    extra = 64
+    one = np.uint64(1)
+    for e in range(len(nodes)):
+        used = np.uint64(0)
+        for a in range(nodes.shape[1]):
+            used |= masks[nodes[e, a]]
+        c = 0
+        while c < 64 and (used >> np.uint64(c)) & one:
+            c += 1
+        if c == 64:
+            color[e] = extra
+            extra += 1
+            continue
+        color[e] = c
+        for a in range(nodes.shape[1]):
+            masks[nodes[e, a]] |= one << np.uint64(c)
+    order = np.argsort(color, kind="mergesort")
+    counts = np.bincount(color) if len(color) else np.zeros(0, np.int64)
+    ptr = np.zeros(len(counts) + 1, np.int64)
+    k = 0
+    for c in range(len(counts)):
+        if counts[c]:
+            k += 1
+            ptr[k] = ptr[k - 1] + counts[c]
+    return order, ptr[: k + 1]
 
 
 def membrane_jacobian_into(model, x, positions, kdata, cdata, *, stiffness=None) -> None:
@@ -264,6 +386,19 @@ def membrane_jacobian_into(model, x, positions, kdata, cdata, *, stiffness=None)
         k1, k2, k12,
         model.face_damping_warp, model.face_damping_weft, model.face_damping_shear, positions, kdata, cdata,
     )
+
+
+def membrane_system_into(model, state, slots, colors, dt, blocks, kv, *, stiffness=None) -> None:
+    """Add the faces' Δt·C + Δt²·K into 3×3 ``blocks`` (element ``slots`` (F, 3, 3)) and K·v into ``kv`` (N, 3)."""
+    k1, k2, k12 = stiffness if stiffness is not None else (model.face_stretch_warp, model.face_stretch_weft, model.face_stretch_shear)
+    _membrane_system(state.x, state.v, model.faces, model.face_dm_inv, model.face_rest_area, k1, k2, k12,
+                     model.face_damping_warp, model.face_damping_weft, model.face_damping_shear, slots, *colors, dt, blocks, kv)
+
+
+def bending_system_into(model, state, slots, colors, dt, blocks, kv, *, stiffness=None) -> None:
+    """Add the hinges' Δt²·K into 3×3 ``blocks`` (element ``slots`` (H, 4, 4)) and K·v into ``kv`` (N, 3)."""
+    _bending_system(state.x, state.v, model.hinge_vertices, model.hinge_stiffness if stiffness is None else stiffness,
+                    slots, *colors, dt, blocks, kv)
 
 
 def bending_jacobian_into(model, x, positions, kdata, *, stiffness=None) -> None:

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from conftest import sheet
 from tailor.forces import bending_forces, damping_forces, internal_forces, stretch_forces
@@ -34,6 +35,42 @@ def test_jacobians_match_reference(deformed):
     k2, c2 = jacobian_blocks(model, state, pattern)
     assert abs(k1 - k2).max() <= 1e-12 * abs(k2).max()
     assert abs(c1 - c2).max() <= 1e-12 * abs(c2).max()
+
+
+@pytest.mark.parametrize("pairs", [False, True], ids=["plain", "with seam pairs"])
+def test_implicit_blocks_are_the_jacobians_of_the_reference(deformed, pairs):
+    """What the implicit step assembles in block form (Δt·C + Δt²·K, K·v; threaded by element
+    colour classes) is the numpy reference's matrices (with seam pairs: the CSR path's, which
+    adds them to the reference's)."""
+    from tailor.forces.jacobian import implicit_blocks
+
+    model, state = deformed
+    if pairs:
+        ids = RNG.choice(model.vertex_count, size=(40, 2), replace=False)
+        model = model.with_pairs(ids, np.full(40, 50.0), np.full(40, 0.2))
+    pattern = SparsePattern(model)
+    k, c = (force_jacobians if pairs else jacobian_blocks)(model, state, pattern)
+    dt = 0.02
+    blocks, kv = implicit_blocks(model, state, pattern, dt)
+    expect = (dt * c + dt * dt * k).tocsr()
+    got = sp.bsr_matrix((blocks, pattern.block_cols, pattern.block_indptr), shape=expect.shape).tocsr()
+    assert abs(got - expect).max() <= 1e-12 * abs(expect).max()
+    ref_kv = k @ state.v.reshape(-1)
+    assert np.abs(kv.reshape(-1) - ref_kv).max() <= 1e-12 * np.abs(ref_kv).max()
+
+
+def test_element_colour_classes_share_no_vertex_and_cover_every_element():
+    from tailor.forces.kernels import element_colors
+
+    model, _ = sheet(30, 20, 0.03, "denim", vertical=False)
+    for nodes in (model.faces, model.hinge_vertices):
+        order, ptr = element_colors(np.asarray(nodes, np.int64), model.vertex_count)
+        assert sorted(order) == list(range(len(nodes)))
+        assert len(ptr) - 1 <= 24  # a triangle mesh needs about its largest vertex valence
+        for c in range(len(ptr) - 1):
+            members = np.asarray(nodes)[order[ptr[c] : ptr[c + 1]]].reshape(-1)
+            assert len(np.unique(members)) == len(members)
+            assert np.all(np.diff(order[ptr[c] : ptr[c + 1]]) > 0)
 
 
 def test_stiffness_is_symmetric_positive_semidefinite_and_predicts_force_change(deformed):
