@@ -25,7 +25,7 @@ import numpy as np
 from .errors import SimulationUnstable
 from .forces.external import air_damping
 from .forces.jacobian import SparsePattern, implicit_blocks
-from .forces.kernels import block_pcg, bsr_matvec, inverse_3x3
+from .forces.kernels import block_pcg, bsr_rows, inverse_3x3
 from .forces.membrane import face_stretch
 from .model import State
 
@@ -278,9 +278,9 @@ class ImplicitEuler:
         """(K, 3) impulse [N·s] the held contacts exert: the residual A·Δv − b at their dofs."""
         if not len(held):
             return np.zeros((0, 3))
-        out = np.empty_like(dv)
-        bsr_matvec(system[0], system[1], system[2], dv, out)
-        return (out - rhs).reshape(-1, 3)[held.ids]
+        out = np.empty((len(held), 3))
+        bsr_rows(system[0], system[1], system[2], dv, held.ids, out)
+        return out - rhs.reshape(-1, 3)[held.ids]
 
     def _halves(self, model, state, dt, forces, depth, carried):
         """The step taken as two half steps, each holding the contacts this one was given."""

@@ -21,7 +21,8 @@ __all__ = [
     "membrane_system_into",
     "bending_system_into",
     "element_colors",
-    "bsr_matvec",
+    "bsr_rows",
+    "face_stretch_into",
     "block_pcg",
     "inverse_3x3",
 ]
@@ -420,10 +421,28 @@ def _block_row(bptr, bcol, blocks, x, i):
 
 
 @njit(cache=True, parallel=True)
-def bsr_matvec(bptr, bcol, blocks, x, out):
-    """out = A·x for A in 3×3 block-CSR form (one block row per vertex), threaded over vertices."""
-    for i in prange(len(bptr) - 1):
-        out[3 * i], out[3 * i + 1], out[3 * i + 2] = _block_row(bptr, bcol, blocks, x, i)
+def bsr_rows(bptr, bcol, blocks, x, rows, out):
+    """out[k] = row ``rows[k]`` of A·x, (K, 3), for A in 3×3 block-CSR form (a few rows of the product)."""
+    for k in prange(len(rows)):
+        out[k, 0], out[k, 1], out[k, 2] = _block_row(bptr, bcol, blocks, x, rows[k])
+
+
+@njit(cache=True, parallel=True)
+def face_stretch_into(x, faces, dm, out):
+    """Largest principal stretch of each triangle into ``out`` (F,): √ of FᵀF's larger eigenvalue."""
+    for f in prange(len(faces)):
+        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+        a = b = c = 0.0
+        for k in range(3):
+            d1 = x[i1, k] - x[i0, k]
+            d2 = x[i2, k] - x[i0, k]
+            c1 = d1 * dm[f, 0, 0] + d2 * dm[f, 1, 0]
+            c2 = d1 * dm[f, 0, 1] + d2 * dm[f, 1, 1]
+            a += c1 * c1
+            b += c2 * c2
+            c += c1 * c2
+        half = 0.5 * (a + b)
+        out[f] = math.sqrt(half + math.sqrt(max(half * half - (a * b - c * c), 0.0)))
 
 
 @njit(cache=True, inline="always")

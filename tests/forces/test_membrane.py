@@ -134,3 +134,15 @@ def test_kawabata_curves_from_a_pattern_file():
 
     with pytest.raises(PatternError, match=r"fabric.kawabata: .*tensile_warp: deformations must increase"):
         pattern_from_dict(doc_with({"a": rect_panel(10, 10)}, fabric={"kawabata": bad}), source="k.json")
+
+
+def test_face_stretch_is_the_largest_principal_stretch(patch):
+    """The compiled per-face stretch (the implicit step's overstretch check) is √ of FᵀF's larger eigenvalue."""
+    from tailor.forces.membrane import deformation_gradient, face_stretch
+
+    model, x0 = patch
+    x = x0 * np.array([1.3, 0.9, 1.0]) + np.random.default_rng(3).normal(0, 0.002, x0.shape)
+    f = deformation_gradient(model, x)
+    expect = np.sqrt(np.linalg.eigvalsh(np.einsum("fki,fkj->fij", f, f))[:, -1])
+    assert np.allclose(face_stretch(model, x), expect, rtol=1e-12)
+    assert face_stretch(model, x).max() > 1.25  # the 1.3 stretch along x is seen
