@@ -1,9 +1,12 @@
-"""Compiled (numba) kernels for the hot path: the fused membrane and bending force loops.
+"""Compiled (numba) kernels for the hot path: the fused membrane and bending force loops, the
+implicit step's Jacobian assembly and its filtered block-Jacobi CG.
 
-They compute exactly what :mod:`.membrane` and :mod:`.bending` compute with numpy (those remain
-the readable reference, and give the energies); ``tests/forces/test_kernels.py`` checks that
-both agree to round-off. ``benchmarks/forces.py`` shows why they exist: at 10k vertices the
-numpy passes take ~30 ms, these ~1 ms. Compiled once per machine (``cache=True``).
+They compute exactly what :mod:`.membrane`, :mod:`.bending` and :mod:`.jacobian` compute with
+numpy (those remain the readable reference, and give the energies); ``tests/forces/test_kernels.py``
+checks that both agree to round-off. ``benchmarks/forces.py`` shows why they exist: at 10k
+vertices the numpy force passes take ~30 ms, these ~1 ms; the Jacobians in 3 × 3 blocks by
+element colour classes are 2–2.5× quicker than the CSR scatter they replaced. Every threaded sum
+has an order fixed by the mesh, not the thread count. Compiled once per machine (``cache=True``).
 """
 
 from __future__ import annotations
