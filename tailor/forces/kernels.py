@@ -503,6 +503,21 @@ def _cg_direction(beta, p, z):
         p[i] = z[i] + beta * p[i]
 
 
+@njit(cache=True, parallel=True)
+def _cg_residual(b, q, r, held, normals, stick, part):
+    """r = S·b − q (q = S·A·x: the filtered residual) in one pass; returns b·b (summed over fixed chunks)."""
+    n = len(held)
+    for ch in prange((n + _CHUNK - 1) // _CHUNK):
+        acc = 0.0
+        for i in range(ch * _CHUNK, min(n, (ch + 1) * _CHUNK)):
+            b0, b1, b2 = b[3 * i], b[3 * i + 1], b[3 * i + 2]
+            acc += b0 * b0 + b1 * b1 + b2 * b2
+            f0, f1, f2 = _held_part(b0, b1, b2, held[i], normals, stick)
+            r[3 * i], r[3 * i + 1], r[3 * i + 2] = f0 - q[3 * i], f1 - q[3 * i + 1], f2 - q[3 * i + 2]
+        part[ch] = acc
+    return _total(part)
+
+
 @njit(cache=True, inline="always")
 def _total(part):
     s = 0.0
@@ -533,22 +548,15 @@ def block_pcg(bptr, bcol, blocks, b, x, pinv, rtol, max_iterations, ids, normals
         held[ids[k]] = k
     part = np.zeros((nv + _CHUNK - 1) // _CHUNK)
     part2 = np.zeros_like(part)
-    bnorm = 0.0
-    for i in range(n):
-        bnorm += b[i] * b[i]
-    bnorm = math.sqrt(bnorm)
+    r = np.empty(n)
+    q = np.empty(n)
+    z = np.empty(n)
+    _cg_product(bptr, bcol, blocks, x, q, held, normals, stick, part)  # q = S·A·x
+    bnorm = math.sqrt(_cg_residual(b, q, r, held, normals, stick, part))  # r = S·b − q
     if bnorm == 0.0:
         if len(ids) == 0:
             x[:] = 0.0
         return 0, True
-    r = np.empty(n)
-    q = np.empty(n)
-    z = np.empty(n)
-    free = np.full(nv, -1, np.int64)
-    _cg_product(bptr, bcol, blocks, x, q, free, normals, stick, part)
-    for i in range(nv):
-        r[3 * i], r[3 * i + 1], r[3 * i + 2] = _held_part(b[3 * i] - q[3 * i], b[3 * i + 1] - q[3 * i + 1],
-                                                          b[3 * i + 2] - q[3 * i + 2], held[i], normals, stick)
     q[:] = 0.0
     _cg_update(0.0, x, r, q, q, z, pinv, held, normals, stick, part, part2)  # z = filter(P·r)
     rz = _total(part)
