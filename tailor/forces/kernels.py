@@ -242,8 +242,8 @@ def _membrane_jacobian(x, faces, dm, area, k1, k2, k12, p1, p2, p12, pos, kdata,
 
 
 @njit(cache=True, inline="always")
-def _add_element(e, nodes, slots, kf, cf, damped, v, dt, blocks, kv):
-    """blocks += Δt·C_e + Δt²·K_e (C_e = ``cf`` if ``damped``) and kv += K_e·v over element e's vertex pairs."""
+def _add_element(e, nodes, slots, kf, cf, v, dt, blocks, kv):
+    """blocks += Δt·C_e + Δt²·K_e and kv += K_e·v over element e's vertex pairs."""
     k = nodes.shape[1]
     dt2 = dt * dt
     for a in range(k):
@@ -255,12 +255,13 @@ def _add_element(e, nodes, slots, kf, cf, damped, v, dt, blocks, kv):
                 acc = 0.0
                 for c in range(3):
                     kk = kf[3 * a + r, 3 * b + c]
-                    if damped:
-                        blocks[s, r, c] += dt * cf[3 * a + r, 3 * b + c] + dt2 * kk
-                    else:
-                        blocks[s, r, c] += dt2 * kk
+                    blocks[s, r, c] += dt * cf[3 * a + r, 3 * b + c] + dt2 * kk
                     acc += kk * v[ib, c]
                 kv[ia, r] += acc
+
+
+_CLASS_CHUNK = 256
+"""Elements of a colour class per parallel task (scratch arrays are made once a task)."""
 
 
 @njit(cache=True, parallel=True)
@@ -271,13 +272,15 @@ def _membrane_system(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, slots, ord
     and every block sums its faces in one order (the class order) on any thread count.
     """
     for col in range(len(cptr) - 1):
-        for t in prange(cptr[col], cptr[col + 1]):
+        lo, hi = cptr[col], cptr[col + 1]
+        for task in prange((hi - lo + _CLASS_CHUNK - 1) // _CLASS_CHUNK):
             g = np.empty((3, 9))
             kf = np.empty((9, 9))
             cf = np.empty((9, 9))
-            f = order[t]
-            _membrane_face(f, x, faces, dm, area, k1, k2, k12, p1, p2, p12, g, kf, cf)
-            _add_element(f, faces, slots, kf, cf, True, v, dt, blocks, kv)
+            for t in range(lo + task * _CLASS_CHUNK, min(hi, lo + (task + 1) * _CLASS_CHUNK)):
+                f = order[t]
+                _membrane_face(f, x, faces, dm, area, k1, k2, k12, p1, p2, p12, g, kf, cf)
+                _add_element(f, faces, slots, kf, cf, v, dt, blocks, kv)
 
 
 @njit(cache=True, inline="always")
@@ -327,25 +330,27 @@ def _bending_system(x, v, hinges, stiffness, slots, order, cptr, dt, blocks, kv)
     """Hinges' Δt²·k·∇θ∇θᵀ into 3×3 blocks and K·v = k·∇θ·(∇θ·v), one colour class of hinges at a time."""
     dt2 = dt * dt
     for col in range(len(cptr) - 1):
-        for t in prange(cptr[col], cptr[col + 1]):
+        lo, hi = cptr[col], cptr[col + 1]
+        for task in prange((hi - lo + _CLASS_CHUNK - 1) // _CLASS_CHUNK):
             g = np.empty(12)
-            h = order[t]
-            if not _hinge_gradient(h, x, hinges, g):
-                continue
-            kh = stiffness[h]
-            gv = 0.0
-            for a in range(4):
-                j = hinges[h, a]
-                gv += g[3 * a] * v[j, 0] + g[3 * a + 1] * v[j, 1] + g[3 * a + 2] * v[j, 2]
-            for a in range(4):
-                ia = hinges[h, a]
-                for r in range(3):
-                    kv[ia, r] += kh * g[3 * a + r] * gv
-                    w = dt2 * kh * g[3 * a + r]
-                    for b in range(4):
-                        s = slots[h, a, b]
-                        for c in range(3):
-                            blocks[s, r, c] += w * g[3 * b + c]
+            for t in range(lo + task * _CLASS_CHUNK, min(hi, lo + (task + 1) * _CLASS_CHUNK)):
+                h = order[t]
+                if not _hinge_gradient(h, x, hinges, g):
+                    continue
+                kh = stiffness[h]
+                gv = 0.0
+                for a in range(4):
+                    j = hinges[h, a]
+                    gv += g[3 * a] * v[j, 0] + g[3 * a + 1] * v[j, 1] + g[3 * a + 2] * v[j, 2]
+                for a in range(4):
+                    ia = hinges[h, a]
+                    for r in range(3):
+                        kv[ia, r] += kh * g[3 * a + r] * gv
+                        w = dt2 * kh * g[3 * a + r]
+                        for b in range(4):
+                            s = slots[h, a, b]
+                            for c in range(3):
+                                blocks[s, r, c] += w * g[3 * b + c]
 
 
 @njit(cache=True)
