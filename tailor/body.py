@@ -1,10 +1,10 @@
 """Bodies: a triangle mesh and its motion, normalised to tailor's frame.
 
-Any standing human comes in: metres or not, Y-up or Z-up, facing any horizontal direction.
-:func:`normalise_body` detects units (a standing adult is 1.0–2.5 m tall), the up axis (the
-longest extent) and the facing (the feet stick out forward from the ankles), then brings the body
-to metres, Z up, facing −Y, feet on z = 0 and centred over the origin. Every choice can be forced,
-and every choice is reported.
+Any standing human comes in: metres or not, Y-up or Z-up, facing any horizontal direction, with
+eyes and teeth as separate parts, from wherever its file put it. :func:`normalise_body` welds
+duplicate vertices, drops small separate parts, detects the up axis, units and facing and the
+trunk's centre (:mod:`tailor.orient`), then brings the body to metres, Z up, facing −Y, feet on
+z = 0 and the trunk over the origin. Every choice can be forced, and every choice is reported.
 """
 
 from __future__ import annotations
@@ -14,14 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import BodyError
+from .orient import AXES, UNITS, body_parts, detect_units, forward, up_rotation, weld
 
 __all__ = ["Body", "normalise_body", "check_body_arrays", "UNITS", "AXES"]
-
-UNITS = {"m": 1.0, "dm": 0.1, "cm": 0.01, "mm": 0.001}
-"""Length units a body file may be in, to metres."""
-
-AXES = {"x": 0, "y": 1, "z": 2}
-"""Axis names for ``up`` and ``facing``."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,130 +100,71 @@ def check_body_arrays(frames, faces, source: str = "body"):
     return frames, faces.astype(np.intp)
 
 
-def _rotation_to_z_up(up: int) -> np.ndarray:
-    """Rotation taking axis ``up`` to +Z (right-handed; Y-up becomes Z-up as (x, −z, y))."""
-    if up == 2:
-        return np.eye(3)
-    if up == 1:
-        return np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
-    return np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
-
-
-def _foot_offsets(vertices):
-    """Horizontal offsets from each planted foot's ankle to the foot's centre (toes pull it forward)."""
-    z = vertices[:, 2]
-    h = np.ptp(z)
-    low = vertices[z < z.min() + 0.03 * h][:, :2]
-    ankles = vertices[(z > z.min() + 0.05 * h) & (z < z.min() + 0.08 * h)][:, :2]
-    if len(low) < 6 or len(ankles) < 6:
-        return []
-    # two feet: split the floor slab across its widest gap-free direction (k-means, 2 clusters)
-    centres = low[[np.argmin(low[:, 0]), np.argmax(low[:, 0])]].astype(float)
-    for _ in range(10):
-        label = np.argmin(((low[:, None, :] - centres[None]) ** 2).sum(axis=2), axis=1)
-        centres = np.array([low[label == c].mean(axis=0) if np.any(label == c) else centres[c] for c in range(2)])
-    if np.linalg.norm(centres[0] - centres[1]) < 0.05 * h:  # one foot (or feet together)
-        centres = low.mean(axis=0, keepdims=True)
-        label = np.zeros(len(low), int)
-    out = []
-    for c, centre in enumerate(centres):
-        near = ankles[np.linalg.norm(ankles - centre, axis=1) < 0.08 * h]
-        if len(near) >= 3 and np.any(label == c):
-            out.append(low[label == c].mean(axis=0) - near.mean(axis=0))
-    return out
-
-
-def _forward(frames) -> np.ndarray:
-    """Horizontal unit axis the body faces: from each planted foot's ankle towards its toes.
-
-    Offsets of every planted foot in every frame are averaged (a lifted foot is not in the
-    floor slab), and the dominant horizontal axis with its sign is the facing.
-    """
-    offsets = []
-    for vertices in np.asarray(frames).reshape(-1, *np.shape(frames)[-2:]):
-        offsets.extend(_foot_offsets(vertices))
-    default = np.array([0.0, -1.0, 0.0])
-    if not offsets:
-        return default
-    d = np.mean(offsets, axis=0)
-    if np.linalg.norm(d) < 0.005 * np.ptp(np.asarray(frames)[..., 2]):
-        return default
-    k = int(np.argmax(np.abs(d)))
-    out = np.zeros(3)
-    out[k] = np.sign(d[k])
-    return out
-
-
 def normalise_body(frames, faces, *, units: str = "auto", up: str = "auto", facing: str = "auto", source: str = "body"):
-    """Bring a body to metres, Z up, facing −Y, feet on z = 0, centred on the origin.
+    """Bring a body to metres, Z up, facing −Y, feet on z = 0, the trunk over the origin.
+
+    Detection (:mod:`tailor.orient`) reads the shape of the first frame (the feet of every frame
+    for the facing); the same transform moves every frame, so a walk that travels keeps travelling.
 
     Parameters
     ----------
     frames : (T, N, 3) or (N, 3)
     units : "auto" or one of :data:`UNITS`
-    up : "auto" or "x", "y", "z"
+    up : "auto" or a signed axis such as "y", "-z"
     facing : "auto" or a signed axis such as "-y", "+z"
         The direction the body faces *in the file's own frame*.
 
     Returns
     -------
-    frames : (T, N, 3) [m]; faces (F, 3); report : dict
+    frames : (T, M, 3) [m]; faces (F, 3); report : dict
+        M ≤ N: duplicate vertices are welded and small separate parts dropped (``report`` says how many).
     """
     frames, faces = check_body_arrays(frames, faces, source)
-    rest = frames[0]
-    extent = np.ptp(rest, axis=0)
-    if up == "auto":
-        up_axis = int(np.argmax(extent))
-    elif up in AXES:
-        up_axis = AXES[up]
-    else:
-        raise BodyError(f"{source}: up must be auto, x, y or z, got {up!r}")
-    tall = extent[up_axis]
-    if units == "auto":
-        fits = [(name, s) for name, s in UNITS.items() if 1.0 <= tall * s <= 2.5]
-        if not fits:
-            raise BodyError(
-                f"{source}: cannot tell the units: the body is {tall:g} units tall, which is no standing human "
-                f"in m, dm, cm or mm; pass the units explicitly"
-            )
-        unit_name, scale = fits[0]
-    elif units in UNITS:
-        unit_name, scale = units, UNITS[units]
-    else:
-        raise BodyError(f"{source}: units must be auto, {', '.join(UNITS)}, got {units!r}")
-    rot = _rotation_to_z_up(up_axis)
-    out = np.einsum("ij,tnj->tni", rot, frames * scale)
-    if facing == "auto":
-        fwd = _forward(out)
-        facing_name = "detected"
-    else:
-        sign = -1.0 if facing.startswith("-") else 1.0
-        name = facing.lstrip("+-")
-        if name not in AXES:
-            raise BodyError(f"{source}: facing must be auto or a signed axis like -y, got {facing!r}")
-        fwd = np.zeros(3)
-        fwd[AXES[name]] = sign
-        fwd = rot @ fwd
-        facing_name = facing
-    if abs(fwd[2]) > 0.5:
-        raise BodyError(f"{source}: the body cannot face its own up axis ({facing})")
+    count_in = frames.shape[1]
+    frames, faces, _ = weld(frames, faces)
+    frames, faces, dropped, _ = body_parts(frames, faces, source)
+    rot, up_name = up_rotation(frames[0], faces, up, source)
+    out = np.einsum("ij,tnj->tni", rot, frames)
+    scale, unit_name = detect_units(float(np.ptp(out[0][:, 2])), units, source)
+    out = out * scale
+    out[..., 2] -= out[0][:, 2].min()
+    fwd, centre = _facing(out, faces, rot, facing, source)
     angle = np.arctan2(fwd[0], -fwd[1])  # rotate about z so that fwd → −Y
     c, s = np.cos(angle), np.sin(angle)
     rz = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-    out = np.einsum("ij,tnj->tni", rz, out)
-    rest = out[0]
-    z0 = rest[:, 2].min()
-    mid = rest[(rest[:, 2] > z0 + 0.45 * np.ptp(rest[:, 2])) & (rest[:, 2] < z0 + 0.6 * np.ptp(rest[:, 2]))]
-    centre = mid[:, :2].mean(axis=0) if len(mid) else rest[:, :2].mean(axis=0)
-    out = out - np.array([centre[0], centre[1], z0])
+    shift = rz[:2, :2] @ centre
+    out = np.einsum("ij,tnj->tni", rz, out) - np.array([shift[0], shift[1], 0.0])
     report = {
         "units": unit_name,
-        "up": "xyz"[up_axis],
-        "facing": facing_name,
+        "up": up_name,
+        "facing": "detected" if facing == "auto" else facing,
         "forward_in_file": (np.linalg.inv(rz @ rot) @ np.array([0.0, -1.0, 0.0])).round(6).tolist(),
+        "centre_shift_m": (-np.append(shift, 0.0)).round(6).tolist(),
         "height_m": float(np.ptp(out[0][:, 2])),
         "frames": int(len(out)),
         "vertices": int(out.shape[1]),
         "faces": int(len(faces)),
+        "vertices_in_file": int(count_in),
+        "parts_dropped": dropped,
     }
     return out, faces, report
+
+
+def _facing(frames, faces, rot, facing, source):
+    """(forward (3,), trunk centre (2,)) of Z-up ``frames``; ``facing`` names it in the file's frame."""
+    try:
+        fwd, centre = forward(frames, faces)
+    except BodyError as exc:
+        raise BodyError(f"{source}: {exc}") from None
+    if facing == "auto":
+        return fwd, centre
+    name = facing.lstrip("+-")
+    if name not in AXES:
+        raise BodyError(f"{source}: facing must be auto or a signed axis like -y, got {facing!r}")
+    given = np.zeros(3)
+    given[AXES[name]] = -1.0 if facing.startswith("-") else 1.0
+    given = rot @ given
+    if abs(given[2]) > 0.5:
+        raise BodyError(f"{source}: the body cannot face its own up axis ({facing})")
+    given[2] = 0.0
+    return given / np.linalg.norm(given), centre

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 import time
 from pathlib import Path
@@ -17,6 +18,9 @@ from .errors import TailorError
 __all__ = ["main"]
 
 log = logging.getLogger("tailor")
+
+UP_CHOICES = ["auto", "x", "y", "z", "-x", "-y", "-z"]
+"""Values of ``--up``: detected, or the file's axis that points up (a minus: the body stands on its head)."""
 
 
 def _pattern_summary(pattern) -> list[str]:
@@ -151,20 +155,49 @@ def _read_body_args(args):
 
 
 def _cmd_body_info(args) -> int:
-    from .measure import find_landmarks
+    from .measure import measure_body
 
     body = _read_body_args(args)
     r = body.report
     print(f"{args.body}: {r.get('vertices', body.frames.shape[1])} vertices, {r.get('faces', len(body.faces))} faces, "
           f"{body.frame_count} frame(s) at {body.fps:g} fps")
-    if "units" in r:
-        print(f"  units {r['units']}, up axis {r['up']}, facing {r['facing']} -> metres, Z up, facing -Y")
+    for line in _normalisation_lines(r):
+        print(f"  {line}")
     print(f"  height {body.height * 100:.1f} cm")
-    marks = find_landmarks(body.vertices, body.faces)
+    marks = measure_body(body)
     print(f"  {'landmark':<16}{'height cm':>10}{'girth cm':>10}{'width cm':>10}{'depth cm':>10}")
     for name, lm in marks.items():
         print(f"  {name:<16}{lm.center[2] * 100:>10.1f}{lm.girth * 100:>10.1f}{lm.width * 100:>10.1f}{lm.depth * 100:>10.1f}")
     return 0
+
+
+def _normalisation_lines(r: dict):
+    """What reading a body did, as ``tailor body info`` prints it."""
+    if "units" not in r:
+        return
+    fwd = ", ".join(f"{c:g}" for c in r.get("forward_in_file", ()))
+    yield f"units {r['units']}, up axis {r['up']}, facing {r['facing']} ({fwd} in the file) -> metres, Z up, facing -Y"
+    if "centre_shift_m" in r:
+        sx, sy, _ = (100 * c for c in r["centre_shift_m"])
+        yield f"moved {sx:+.1f}, {sy:+.1f} cm to put the trunk over the origin, feet on the floor"
+    welded = r.get("vertices_in_file", r.get("vertices", 0)) - r.get("vertices", 0)
+    if welded or r.get("parts_dropped"):
+        yield (f"{r.get('parts_dropped', 0)} small separate part(s) dropped (eyes, teeth, lashes, ...); "
+               f"{welded} duplicate or unused vertices removed")
+
+
+def _landmark_segments(mark):
+    """Two 3D segments across a landmark's cut (its width and its depth), for the body picture."""
+    import numpy as np
+
+    c = np.asarray(mark.center)
+    axis = np.asarray(mark.axis)
+    across = np.cross(axis, [0.0, 1.0, 0.0])
+    across = across / np.linalg.norm(across) if np.linalg.norm(across) > 1e-6 else np.array([1.0, 0.0, 0.0])
+    depth = np.cross(axis, across)
+    color = (0.85, 0.15, 0.1) if abs(axis[2]) > 0.9 else (0.1, 0.35, 0.85)
+    return [(c - 0.5 * mark.width * across, c + 0.5 * mark.width * across, color),
+            (c - 0.5 * mark.depth * depth, c + 0.5 * mark.depth * depth, color)]
 
 
 def _cmd_body_make(args) -> int:
@@ -183,9 +216,15 @@ def _cmd_body_make(args) -> int:
 def _cmd_body_render(args) -> int:
     from .io.render import render_views
 
+    from .measure import measure_body
+
     body = _read_body_args(args)
     frame = min(max(args.frame, 0), body.frame_count - 1)
-    render_views(args.out, [(body.frames[frame], body.faces, (0.78, 0.78, 0.8))],
+    lines = []
+    if not args.no_landmarks:
+        for mark in measure_body(body, body.frames[frame]).values():
+            lines.extend(_landmark_segments(mark))
+    render_views(args.out, [(body.frames[frame], body.faces, (0.78, 0.78, 0.8))], lines=lines,
                  title=f"{args.body} frame {frame}" if body.frame_count > 1 else str(args.body))
     print(f"wrote {args.out}")
     return 0
@@ -509,7 +548,7 @@ def build_parser() -> argparse.ArgumentParser:
     def body_source(parser):
         parser.add_argument("body", metavar="BODY", help="mesh file, frame folder, npz, PC2, or mannequin / mannequin-walk")
         parser.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
-        parser.add_argument("--up", default="auto", choices=["auto", "x", "y", "z"])
+        parser.add_argument("--up", default="auto", choices=UP_CHOICES)
         parser.add_argument("--facing", default="auto", help="direction the body faces in its file: auto, -y, +z, ...")
         parser.add_argument("--base", help="base mesh of a PC2 point cache")
 
@@ -533,6 +572,7 @@ def build_parser() -> argparse.ArgumentParser:
     br = bsub.add_parser("render", help="front and side views as a PNG")
     body_source(br)
     br.add_argument("--frame", type=int, default=0)
+    br.add_argument("--no-landmarks", action="store_true", help="leave the landmark cuts off the picture")
     br.add_argument("--out", required=True, metavar="PNG")
     br.set_defaults(func=_cmd_body_render)
 
@@ -542,7 +582,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("pattern", metavar="PATTERN")
     d.add_argument("--body", default="mannequin", help="mannequin (default), mannequin-walk, or a body file/folder")
     d.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
-    d.add_argument("--up", default="auto", choices=["auto", "x", "y", "z"])
+    d.add_argument("--up", default="auto", choices=UP_CHOICES)
     d.add_argument("--facing", default="auto")
     d.add_argument("--base", help="base mesh of a PC2 body")
     d.add_argument("--fabric", choices=fabric_names(), help="override the pattern's fabric")
@@ -627,6 +667,9 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("tailor: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (| head): nothing more to say, and no traceback
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":

@@ -33,7 +33,7 @@ from .collide import SELF_COLLISION_MODES, BodyCollider, InsideTest, SelfCollide
 from .errors import SimulationError
 from .fabric import Fabric, preset
 from .forces import total_forces
-from .measure import find_landmarks
+from .measure import measure_body
 from .mesh import discretise
 from .model import AIR_DENSITY, build_model
 from .placement import limb_walls, place_panels
@@ -279,7 +279,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     has_rest = moving and body.rest is not None
     pose = body.rest if has_rest else body.frames[0]
     keys = TRANSITION_KEYS if has_rest else 0
-    landmarks = find_landmarks(pose, body.faces)
+    landmarks = measure_body(body, pose)
     x0 = place_panels(pattern, mesh, landmarks, inside=InsideTest(pose, body.faces))
     walls = limb_walls(pattern, landmarks, pose)
     thickness = max(f.thickness for f in fabrics.values()) + 0.002

@@ -20,14 +20,20 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from .errors import BodyError
+from .sections import horizontal_outlines
 from .units import CM, DEG
 
 __all__ = ["Measurements", "MEASUREMENT_PRESETS", "Mannequin", "make_mannequin", "walk_cycle", "BONES"]
 
 
+POSE_ANGLES = {"arm_angle": (0.0, 80.0 * DEG), "arm_forward": (-45.0 * DEG, 45.0 * DEG), "leg_spread": (-5.0 * DEG, 30.0 * DEG)}
+"""Ranges of the pose angles [rad]: arms below horizontal (0: T-pose), arms swung forward (+) or
+back (−) from the frontal plane, each leg out from vertical (−: the legs pressed together)."""
+
+
 @dataclass(frozen=True, slots=True)
 class Measurements:
-    """Tape measurements of a body [m], the arms' pose angle and the shoulders' slope [rad].
+    """Tape measurements of a body [m], its pose angles and the shoulders' slope [rad].
 
     Heights are derived from lengths the way GarmentCode's body parameters are: the shoulder
     line sits ``head`` below the top of the head at the neck and falls ``shoulder_slope``
@@ -52,11 +58,16 @@ class Measurements:
     shoulder_to_waist: float = 0.368913
     waist_to_hips: float = 0.234837
     hips_to_crotch: float = 0.0881363
+    arm_forward: float = 0.0
+    leg_spread: float = 0.0
 
     def __post_init__(self):
         for k, v in asdict(self).items():
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and (v > 0 or k in POSE_ANGLES)):
                 raise BodyError(f"measurement {k} must be a positive number, got {v!r}")
+        for k, (lo, hi) in POSE_ANGLES.items():
+            if not lo <= getattr(self, k) <= hi:
+                raise BodyError(f"{k} must be between {lo / DEG:g} and {hi / DEG:g} degrees, got {getattr(self, k) / DEG:g}")
         if not 1.0 <= self.height <= 2.5:
             raise BodyError(f"height must be between 100 and 250 cm, got {self.height / CM:g} cm")
         if not self.waist < self.hips * 1.3 or not self.bust < self.height:
@@ -186,16 +197,17 @@ class _Torso:
 
 def _torso_rings(m: Measurements, scale=None) -> _Torso:
     s = np.ones(9) if scale is None else scale
+    k = m.height / 1.72  # offsets drawn on a 172 cm body, scaled to this one (a child's rings stay in order)
     rows = [  # (z, circumference, depth/width, centre y)
-        (m.crotch_z + 0.012, 0.86 * m.hips, 0.80, 0.012),
+        (m.crotch_z + 0.012 * k, 0.86 * m.hips, 0.80, 0.012),
         (m.hips_z, m.hips, 0.80, 0.015),
         (0.5 * (m.hips_z + m.waist_z), 0.5 * (m.hips + m.waist), 0.74, 0.008),
         (m.waist_z, m.waist, 0.72, 0.0),
-        (0.5 * (m.waist_z + m.bust_z) + 0.01, m.underbust, 0.74, -0.003),
+        (0.5 * (m.waist_z + m.bust_z) + 0.01 * k, m.underbust, 0.74, -0.003),
         (m.bust_z, m.bust, 0.77, -0.007),
-        (m.bust_z + 0.085, 0.96 * m.bust, 0.68, 0.004),
-        (m.shoulder_z - 0.035, 0.95 * m.bust, 0.52, 0.012),
-        (m.shoulder_z + 0.005, 0.62 * m.bust, 0.55, 0.012),
+        (m.bust_z + 0.085 * k, 0.96 * m.bust, 0.68, 0.004),
+        (m.shoulder_z - 0.035 * k, 0.95 * m.bust, 0.52, 0.012),
+        (m.shoulder_z + 0.005 * k, 0.62 * m.bust, 0.55, 0.012),
     ]
     z, a, b, y = [], [], [], []
     for (zz, circ, aspect, cy), f in zip(rows, s):
@@ -218,16 +230,26 @@ def _skeleton(m: Measurements) -> dict:
     down = m.arm_angle
     upper, fore = 0.54 * m.arm_length, 0.46 * m.arm_length
     for side, sx in (("l", 1.0), ("r", -1.0)):
-        d = np.array([sx * math.cos(down), 0.0, -math.sin(down)])
+        d = np.array([sx * math.cos(down), -math.sin(down) * math.sin(m.arm_forward), -math.sin(down) * math.cos(m.arm_forward)])
         sh = np.array([sx * (0.5 * m.shoulder_width - 0.035), 0.012, m.acromion_z - 0.04])
         j[f"{side}_shoulder"] = sh
         j[f"{side}_elbow"] = sh + upper * d
         j[f"{side}_wrist"] = sh + (upper + fore) * d
-        hip = np.array([sx * 0.102, 0.005, m.crotch_z + 0.06])
+        wide = _scales(m)["hips"]  # legs stand apart as wide as the hips are
+        hip = np.array([sx * 0.102 * wide, 0.005, m.crotch_z + 0.06])
         j[f"{side}_hip"] = hip
-        j[f"{side}_knee"] = np.array([sx * 0.095, 0.0, m.knee_z])
-        j[f"{side}_ankle"] = np.array([sx * 0.098, 0.02, m.ankle_z])
+        spread = _rotation([0.0, 1.0, 0.0], -sx * m.leg_spread)  # the leg swings out about the hip
+        j[f"{side}_knee"] = hip + spread @ (np.array([sx * 0.095 * wide, 0.0, m.knee_z]) - hip)
+        j[f"{side}_ankle"] = hip + spread @ (np.array([sx * 0.098 * wide, 0.02, m.ankle_z]) - hip)
     return j
+
+
+def _scales(m: Measurements) -> dict:
+    """Sizes of this body over the default's: limbs, hands and feet drawn for the default scale with
+    them (1 for the default body), so a child or a heavy body has limbs of its own proportions."""
+    base = MEASUREMENT_PRESETS["default"]
+    return {"height": m.height / base.height, "hips": m.hips / base.hips, "arm": m.bust / base.bust,
+            "leg": m.thigh / base.thigh}
 
 
 def _primitives(m: Measurements, torso: _Torso, j: dict):
@@ -235,6 +257,8 @@ def _primitives(m: Measurements, torso: _Torso, j: dict):
     thigh_r = m.thigh / (2 * math.pi)
     wrist_r = m.wrist / (2 * math.pi)
     neck_r = 0.31 * m.neck_width
+    k = _scales(m)
+    arm, leg, size = k["arm"], k["leg"], k["height"]
     prims = [
         ("chest", torso.sdf, 0.0),
         ("neck", lambda p: _round_cone(p, j["neck"] - [0, 0, 0.03], j["head"] - [0, 0, 0.06], neck_r, neck_r * 0.95), 0.02),
@@ -245,13 +269,14 @@ def _primitives(m: Measurements, torso: _Torso, j: dict):
         d = (wr - el) / np.linalg.norm(wr - el)
         hip, kn, an = j[f"{side}_hip"], j[f"{side}_knee"], j[f"{side}_ankle"]
         prims += [
-            (f"{side}_upper_arm", lambda p, sh=sh, el=el: _round_cone(p, sh, el, 0.048, 0.037), 0.025),
-            (f"{side}_forearm", lambda p, el=el, wr=wr: _round_cone(p, el, wr, 0.037, wrist_r), 0.01),
-            (f"{side}_hand", lambda p, wr=wr, d=d: _ellipsoid(p, wr + 0.075 * d, np.array([0.045, 0.022, 0.045])), 0.015),
-            (f"{side}_thigh", lambda p, hip=hip, kn=kn: _round_cone(p, hip, kn, thigh_r * 0.97, 0.058), 0.035),
-            (f"{side}_shin", lambda p, kn=kn, an=an: _round_cone(p, kn, an, 0.056, 0.034), 0.015),
-            (f"{side}_shin", lambda p, kn=kn, an=an: _ellipsoid(p, 0.6 * kn + 0.4 * an + [0, 0.012, 0.03], np.array([0.055, 0.058, 0.11])), 0.03),
-            (f"{side}_foot", lambda p, an=an: _ellipsoid(p, np.array([an[0], -0.045, 0.028]), np.array([0.045, 0.125, 0.042])), 0.025),
+            (f"{side}_upper_arm", lambda p, sh=sh, el=el: _round_cone(p, sh, el, 0.048 * arm, 0.037 * arm), 0.025),
+            (f"{side}_forearm", lambda p, el=el, wr=wr: _round_cone(p, el, wr, 0.037 * arm, wrist_r), 0.01),
+            (f"{side}_hand", lambda p, wr=wr, d=d: _ellipsoid(p, wr + 0.06 * size * d, np.array([0.045, 0.022, 0.05]) * size), 0.02),
+            (f"{side}_thigh", lambda p, hip=hip, kn=kn: _round_cone(p, hip, kn, thigh_r * 0.97, 0.058 * leg), 0.035),
+            (f"{side}_shin", lambda p, kn=kn, an=an: _round_cone(p, kn, an, 0.056 * leg, 0.034 * leg), 0.015),
+            (f"{side}_shin", lambda p, kn=kn, an=an: _ellipsoid(p, 0.6 * kn + 0.4 * an + [0, 0.012, 0.03], np.array([0.055, 0.058, 0.11]) * leg), 0.03),
+            (f"{side}_foot", lambda p, an=an: _ellipsoid(p, an + np.array([0.0, -0.065, 0.028]) * size - [0.0, 0.0, m.ankle_z],
+                                                           np.array([0.045, 0.125, 0.042]) * size), 0.025),
         ]
     return prims
 
@@ -302,8 +327,10 @@ def _mesh(m: Measurements, torso, joints, resolution):
     from skimage.measure import marching_cubes
 
     prims = _primitives(m, torso, joints)
-    lo = np.array([-(0.5 * m.shoulder_width + m.arm_length + 0.12), -0.22, -0.02])
-    hi = np.array([-lo[0], 0.2, m.height + 0.02])
+    reach = (m.arm_length + 0.12) * math.sin(m.arm_angle) * abs(math.sin(m.arm_forward))  # arms swung forward or back
+    deep = max(1.0, max(m.hips, m.bust) / MEASUREMENT_PRESETS["default"].hips)  # room front and back for a heavy body
+    lo = np.array([-(0.5 * m.shoulder_width + m.arm_length + 0.12), -0.22 * deep - reach, -0.02])
+    hi = np.array([-lo[0], 0.2 * deep + reach, m.height + 0.02])
     shape = np.ceil((hi - lo) / resolution).astype(int) + 1
     axes = [lo[k] + resolution * np.arange(shape[k]) for k in range(3)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -324,17 +351,13 @@ def _largest_component(vertices, faces):
 
 
 def _girth(vertices, faces, z):
-    """Convex-hull perimeter (a tape measure) of the torso's cross-section at height z [m]."""
-    import trimesh
-    from shapely.geometry import MultiPoint
+    """Convex-hull perimeter (a tape measure) of the torso's cross-section at height z [m]: the
+    outline round the body's axis (the arms and hands are others)."""
+    from shapely.geometry import Point
 
-    mesh = trimesh.Trimesh(vertices, faces, process=False)
-    sec = mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1])
-    if sec is None:
-        return 0.0
-    pts = np.asarray(sec.vertices)[:, :2]
-    pts = pts[np.hypot(pts[:, 0], pts[:, 1]) < 0.25]  # the trunk, not the arms
-    return MultiPoint(pts).convex_hull.length if len(pts) >= 3 else 0.0
+    polys = horizontal_outlines(vertices, faces, [z])[0]
+    trunk = [p for p in polys if p.contains(Point(0.0, 0.0))]
+    return trunk[0].convex_hull.length if trunk else 0.0
 
 
 def make_mannequin(measurements: Measurements | None = None, *, resolution: float = 0.016, calibrate: int = 3) -> Mannequin:
@@ -350,7 +373,8 @@ def make_mannequin(measurements: Measurements | None = None, *, resolution: floa
     m = measurements or Measurements()
     joints = _skeleton(m)
     scale = np.ones(9)
-    targets = {1: (m.hips_z, m.hips), 3: (m.waist_z, m.waist), 4: (0.5 * (m.waist_z + m.bust_z) + 0.01, m.underbust), 5: (m.bust_z, m.bust)}
+    targets = {1: (m.hips_z, m.hips), 3: (m.waist_z, m.waist), 4: (0.5 * (m.waist_z + m.bust_z) + 0.01 * m.height / 1.72, m.underbust),
+               5: (m.bust_z, m.bust)}
     for round_ in range(calibrate + 1):
         torso = _torso_rings(m, scale)
         verts, faces, prims = _mesh(m, torso, joints, resolution)
@@ -462,5 +486,5 @@ def walk_cycle(mannequin: Mannequin, *, frames: int = 25, period: float = 1.0) -
 
 def with_measurements(base: Measurements, **cm_values) -> Measurements:
     """A copy of ``base`` with some measurements replaced, given in cm (angles in degrees)."""
-    values = {k: (v * DEG if k in ("arm_angle", "shoulder_slope") else v * CM) for k, v in cm_values.items() if v is not None}
+    values = {k: (v * DEG if k in ("shoulder_slope", *POSE_ANGLES) else v * CM) for k, v in cm_values.items() if v is not None}
     return replace(base, **values)

@@ -119,14 +119,14 @@ def test_cli_body_info_and_errors(tmp_path, capsys):
 
 @pytest.mark.parametrize("turn", [0, 1, 2, 3])
 def test_facing_of_every_walk_frame_alone(turn):
-    from tailor.body import _forward
+    from tailor.orient import forward
 
     walk = read_body("mannequin-walk")
     c, s = np.cos(turn * np.pi / 2), np.sin(turn * np.pi / 2)
     rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     expected = rot @ [0.0, -1.0, 0.0]
     for frame in walk.frames:
-        assert _forward((frame @ rot.T)[None]) == pytest.approx(expected, abs=1e-9)
+        assert forward((frame @ rot.T)[None], walk.faces)[0] == pytest.approx(expected, abs=1e-9)
 
 
 @pytest.mark.parametrize("suffix", [".ply", ".stl", ".off", ".glb"])

@@ -10,14 +10,14 @@ PKG = Path(__file__).resolve().parents[1] / "tailor"
 # module → layer; a module may import tailor modules of the same or a lower layer only
 LAYERS = {
     "errors": 0, "units": 0, "landmarks": 0,
-    "geometry": 1, "curves": 1, "topology": 1, "hanging": 1,
-    "pattern": 2, "fabric": 2, "body": 2,
-    "mesh": 3, "placement": 3, "mannequin": 3, "measure": 3,
-    "params": 4, "model": 4,
+    "geometry": 1, "curves": 1, "topology": 1, "hanging": 1, "sections": 1,
+    "pattern": 2, "fabric": 2, "body": 2, "orient": 2,
+    "mesh": 3, "placement": 3, "mannequin": 3, "measure": 3, "arms": 3,
+    "params": 4, "model": 4, "sizing": 4,
     "forces": 5, "collide": 5, "seams": 5,
     "integrators": 6,
     "sim": 7, "scenes": 7, "drape": 7, "tearing": 7,
-    "io": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9, "batch": 9, "validate": 9,
+    "io": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9, "batch": 9, "validate": 9, "corpus": 9,
 }
 OWNERS = {"triangle": {"mesh"}, "fcl": {"collide"}, "meshio": {"io"}, "skimage": {"mannequin"}, "matplotlib": {"io"},
           "pxr": {"io"}, "PIL": {"io"}, "tqdm": {"cli"},

@@ -134,7 +134,7 @@ def read_body(source, *, units: str = "auto", up: str = "auto", facing: str = "a
         raise BodyError(f"{path.name}: unknown body format {path.suffix!r}; use {', '.join(MESH_SUFFIXES)}, .npz, .pc2 or a folder")
     frames, faces = check_body_arrays(frames, faces, path.name)
     frames, faces, report = normalise_body(frames, faces, units=units, up=up, facing=facing, source=path.name)
-    return Body(frames, faces, fps or rate, path.stem, report)
+    return Body(frames, faces, fps or rate, path.stem, {**report, "source": path.name})
 
 
 def write_body_npz(path, body: Body, *, quantum: float = 2e-5) -> None:

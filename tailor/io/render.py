@@ -25,8 +25,11 @@ def _shade(vertices, faces, view_dir, base_color):
     return color, depth
 
 
-def render_views(path, meshes, *, views=("front", "side"), size=(8, 6), title=None, dpi=100):
-    """Render ``meshes`` [(vertices (N, 3), faces (F, 3), rgb)] seen from the front (−Y) and side (+X) to a PNG."""
+def render_views(path, meshes, *, views=("front", "side"), size=(8, 6), title=None, dpi=100, lines=()):
+    """Render ``meshes`` [(vertices (N, 3), faces (F, 3), rgb)] seen from the front (−Y) and side (+X) to a PNG.
+
+    ``lines`` [(start (3,), end (3,), rgb)] are drawn over the meshes (landmark cuts, say).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -51,6 +54,9 @@ def render_views(path, meshes, *, views=("front", "side"), size=(8, 6), title=No
         polys, colors, depths = np.concatenate(polys), np.concatenate(colors), np.concatenate(depths)
         order = np.argsort(-depths)  # far first
         ax.add_collection(PolyCollection(polys[order], facecolors=colors[order], edgecolors="none"))
+        for start, end, rgb in lines:
+            seg = np.array([start, end])[:, [i, j]] * ([-1.0, 1.0] if view == "back" else 1.0)
+            ax.plot(seg[:, 0], seg[:, 1], color=rgb, linewidth=1.2)
         allxy = polys.reshape(-1, 2)
         ax.set_xlim(allxy[:, 0].min() - 0.05, allxy[:, 0].max() + 0.05)
         ax.set_ylim(allxy[:, 1].min() - 0.05, allxy[:, 1].max() + 0.05)
