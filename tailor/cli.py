@@ -151,7 +151,7 @@ def _cmd_params(args) -> int:
 def _read_body_args(args):
     from .io.body_files import read_body
 
-    return read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base)
+    return read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base, fps=args.body_fps)
 
 
 def _cmd_body_info(args) -> int:
@@ -230,6 +230,42 @@ def _cmd_body_render(args) -> int:
     return 0
 
 
+def _graded(pattern, body):
+    """``pattern`` graded from tailor's default mannequin (GarmentCode's mean body) to ``body``; prints the scales."""
+    from .io.body_files import read_body
+    from .measure import measure_body
+    from .sizing import grade
+
+    graded, scales = grade(pattern, measure_body(body), measure_body(read_body("mannequin")))
+    shown = ", ".join(f"{name} {sx:.2f}×{sy:.2f}" for name, (sx, sy) in scales.items())
+    print(f"graded {pattern.source} to {body.report.get('source', body.name)} (across × along): {shown}")
+    return graded, scales
+
+
+def _cmd_grade(args) -> int:
+    import json
+
+    from .io.atomic import atomic_write
+    from .io.pattern_json import pattern_from_dict, reshaped_document
+    from .measure import measure_body
+    from .sizing import check_loops
+
+    path = Path(args.pattern)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise TailorError(f"{path}: cannot read the pattern: {exc}") from None
+    pattern = pattern_from_dict(doc, source=path.name, name=path.stem)
+    body = _read_body_args(args)
+    graded, _ = _graded(pattern, body)
+    for loop in check_loops(graded, measure_body(body)):
+        print(f"  {loop.landmark:<16} loop {loop.length * 100:6.1f} cm, body {loop.girth * 100:6.1f} cm, ease {loop.ease * 100:+5.1f} cm")
+    with atomic_write(args.out) as fh:
+        json.dump(reshaped_document(doc, graded), fh, indent=1)
+    print(f"wrote {args.out}")
+    return 0
+
+
 def _cmd_drape(args) -> int:
     from .drape import drape
     from .io import read_pattern
@@ -250,7 +286,9 @@ def _cmd_drape(args) -> int:
     out = Path(args.out) if args.out else Path("out") / pattern.name
     if out.exists() and not args.overwrite:
         raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
-    body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base)
+    body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base, fps=args.body_fps)
+    if args.grade == "auto":
+        pattern, _ = _graded(pattern, body)
     fabric = None
     if args.fabric:
         from .fabric import preset
@@ -545,12 +583,16 @@ def build_parser() -> argparse.ArgumentParser:
     b = sub.add_parser("body", help="bodies: information and landmarks, the mannequin, pictures")
     bsub = b.add_subparsers(dest="body_command", required=True, metavar="ACTION")
 
-    def body_source(parser):
-        parser.add_argument("body", metavar="BODY", help="mesh file, frame folder, npz, PC2, or mannequin / mannequin-walk")
+    def body_source(parser, option=False):
+        if option:
+            parser.add_argument("--body", required=True, help="mesh file, frame folder, npz, PC2, or mannequin / mannequin-walk")
+        else:
+            parser.add_argument("body", metavar="BODY", help="mesh file, frame folder, npz, PC2, or mannequin / mannequin-walk")
         parser.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
         parser.add_argument("--up", default="auto", choices=UP_CHOICES)
         parser.add_argument("--facing", default="auto", help="direction the body faces in its file: auto, -y, +z, ...")
         parser.add_argument("--base", help="base mesh of a PC2 point cache")
+        parser.add_argument("--body-fps", type=float, metavar="FPS", help="frame rate of a moving body (default: the file's, else 25)")
 
     bi = bsub.add_parser("info", help="units and axes detected, height, landmarks")
     body_source(bi)
@@ -576,6 +618,12 @@ def build_parser() -> argparse.ArgumentParser:
     br.add_argument("--out", required=True, metavar="PNG")
     br.set_defaults(func=_cmd_body_render)
 
+    gr = sub.add_parser("grade", help="resize a pattern to a body (its girths across, its lengths along); writes a pattern file")
+    gr.add_argument("pattern", metavar="PATTERN")
+    body_source(gr, option=True)
+    gr.add_argument("--out", required=True, metavar="PATTERN.json")
+    gr.set_defaults(func=_cmd_grade)
+
     from .integrators import INTEGRATORS
 
     d = sub.add_parser("drape", help="place, sew and drape a pattern on a body; writes an OBJ per frame")
@@ -585,6 +633,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--up", default="auto", choices=UP_CHOICES)
     d.add_argument("--facing", default="auto")
     d.add_argument("--base", help="base mesh of a PC2 body")
+    d.add_argument("--body-fps", type=float, metavar="FPS", help="frame rate of a moving body (default: the file's, else 25)")
+    d.add_argument("--grade", choices=["none", "auto"], default="none",
+                   help="auto: resize the pattern to the body first (its girths across, its lengths along)")
     d.add_argument("--fabric", choices=fabric_names(), help="override the pattern's fabric")
     d.add_argument("--frames", type=int, default=25, help="frames after dressing (default 25)")
     d.add_argument("--fps", type=float, default=25.0)

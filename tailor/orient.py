@@ -3,7 +3,7 @@
 Every detection reads the body's shape, never where the file put its origin:
 
 * **parts**: duplicate vertices are welded (STL and UV-split OBJ), then the mesh is split into
-  connected parts. Parts under 2 % of the largest's area (eyes, teeth, lashes, tongue, buttons)
+  connected parts (a mesh whose median edge is a tenth of its size is no surface: refused). Parts under 2 % of the largest's area (eyes, teeth, lashes, tongue, buttons)
   are dropped; a second part of the largest's size beside it (not overlapping) is a second person.
 * **up**: the major principal axis of the surface's area (a standing body is tallest; a T-pose's
   arm span puts only the thin arms far out, so even when it is as wide as tall the spread along
@@ -89,6 +89,11 @@ def body_parts(frames, faces, source="body"):
     main = int(np.argmax(part_area))
     if part_area[main] <= 0:
         raise BodyError(f"{source}: the mesh has no area (every face is flat to a line)")
+    edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2)
+    size = float(np.ptp(x, axis=0).max())
+    if len(faces) >= 100 and np.median(edges) > 0.1 * size:  # a body's triangles are small beside it
+        raise BodyError(f"{source}: the faces do not make a surface (the median edge is {np.median(edges) / size:.0%} of the "
+                        "body's size): are the face indices scrambled?")
     lo, hi = _part_boxes(x, label, count)
     big = np.flatnonzero(part_area >= 0.3 * part_area[main])
     apart = [p for p in big if p != main and (np.any(lo[p] > hi[main]) or np.any(hi[p] < lo[main]))]

@@ -8,10 +8,12 @@ later — so :func:`check_loops` says so before any simulation, naming the loop,
 the fix.
 
 :func:`grade` resizes a pattern to a body proportionally (a pattern maker's grading): the
-pattern's design measurements (GarmentCode's body parameters where the file has them, otherwise
-those of tailor's default mannequin) against the body's landmarks. Girths scale the panels
-horizontally, lengths vertically, each region by its own ratio; a seam's two sides are then
-made equal again by scaling the shorter edge's panel along it, so seams stay matched.
+landmarks of the body the pattern was drafted for (the caller's; ``tailor`` uses its default
+mannequin, GarmentCode's mean body, since pattern files carry no body measurements) against the
+body's. Girths scale the panels across, lengths along, each region (trunk, arms, legs) by its own
+ratio; a limb panel sewn to the trunk (a sleeve cap to its armhole, a trouser leg to its
+waistband) then gives way across until those seams are as long relative to each other as they
+were, so seams stay matched.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 from .errors import PatternError
 from .pattern import LandmarkPlacement
 
-__all__ = ["Loop", "pattern_loops", "check_loops", "NEGATIVE_EASE", "FitError"]
+__all__ = ["Loop", "pattern_loops", "check_loops", "NEGATIVE_EASE", "FitError", "grade", "grade_scales"]
 
 NEGATIVE_EASE = 0.05
 """Share by which a loop may be shorter than the girth it goes round (a snug, stretched fit)."""
@@ -69,15 +71,17 @@ def _outline(panel):
 
 
 def _row_width(panel) -> float:
-    """The panel's width across the row its placement puts on the landmark [m]."""
+    """The panel's width across the rows its placement puts on the landmark [m]: the widest row within
+    4 cm (a curved waistline's highest point is narrower than the waist it makes; the openings of
+    darts crossing a row are left out, as they are sewn shut)."""
     from shapely.geometry import LineString
 
     poly = _outline(panel)
     x0, y0, x1, y1 = poly.bounds
     pl = panel.placement
     anchor_y = pl.anchor[1] if pl.anchor is not None else y1
-    y = float(np.clip(anchor_y - pl.offset, y0 + 1e-3, y1 - 1e-3))
-    return float(poly.intersection(LineString([(x0 - 1.0, y), (x1 + 1.0, y)])).length)
+    rows = np.clip(anchor_y - pl.offset + np.linspace(-0.04, 0.04, 9), y0 + 1e-3, y1 - 1e-3)
+    return max(float(poly.intersection(LineString([(x0 - 1.0, y), (x1 + 1.0, y)])).length) for y in rows)
 
 
 def _is_ring(pattern, names) -> bool:
@@ -146,3 +150,123 @@ def check_loops(pattern, landmarks, *, negative_ease: float = NEGATIVE_EASE) -> 
             )
         out.append(loop)
     return out
+
+
+# ---- grading ---------------------------------------------------------------------------------------
+
+REGIONS = {"arm": ("left_upper_arm", "right_upper_arm", "left_elbow", "right_elbow", "left_wrist", "right_wrist"),
+           "leg": ("left_thigh", "right_thigh", "left_knee", "right_knee", "left_ankle", "right_ankle")}
+"""Landmarks of the limbs; every other landmark is the trunk's."""
+
+
+def _region(landmark: str) -> str:
+    return next((r for r, names in REGIONS.items() if landmark in names), "trunk")
+
+
+def _lengths(marks) -> dict:
+    """Per region, the length a panel there scales its height with [m]."""
+    arm = np.mean([np.linalg.norm(np.subtract(marks[f"{s}_upper_arm"].center, marks[f"{s}_wrist"].center))
+                   for s in ("left", "right")])
+    return {"trunk": marks["neck"].height, "arm": float(arm), "leg": marks["crotch"].height}
+
+
+def _girth(marks, landmark):
+    return (marks.get("bust") if landmark == "chest" else marks[landmark]).girth
+
+
+def grade_scales(pattern, body, design) -> dict:
+    """Per panel name, (horizontal, vertical) scale taking ``design``'s landmarks to ``body``'s.
+
+    A panel round a landmark scales across by that landmark's girth ratio and along by its region's
+    length ratio (trunk: the neck's height; arms: upper arm to wrist; legs: the crotch's height). A
+    rigidly placed panel scales by the mean of the bust, waist and hips ratios and by the trunk's.
+    """
+    lb, ld = _lengths(body), _lengths(design)
+    mean = float(np.mean([_girth(body, k) / _girth(design, k) for k in ("bust", "waist", "hips")]))
+    out = {}
+    for panel in pattern.panels:
+        pl = panel.placement
+        if isinstance(pl, LandmarkPlacement):
+            region = _region(pl.landmark)
+            out[panel.name] = (_girth(body, pl.landmark) / _girth(design, pl.landmark), lb[region] / ld[region])
+        else:
+            out[panel.name] = (mean, lb["trunk"] / ld["trunk"])
+    return out
+
+
+def _scale_curve(curve, f):
+    from .curves import Curve
+
+    pts = tuple(tuple(map(float, f(np.asarray(p, float)))) for p in curve.points)
+    if curve.kind != "circle":
+        return replace(curve, points=pts)
+    chord = 0.5 * float(np.linalg.norm(np.subtract(pts[-1], pts[0])))
+    old_chord = 0.5 * float(np.linalg.norm(np.subtract(curve.points[-1], curve.points[0])))
+    radius = max(curve.radius * chord / max(old_chord, 1e-12), chord * (1.0 + 1e-9))  # the same arc's share of a circle
+    return Curve(curve.kind, pts, radius, curve.large_arc, curve.sweep)
+
+
+def _scaled_panel(panel, sx, sy):
+    """``panel`` scaled by (sx, sy) about its anchor (a rigid placement: about its origin, moving it too)."""
+    pl = panel.placement
+    if isinstance(pl, LandmarkPlacement):
+        lo = np.min(panel.vertices, axis=0)
+        hi = np.max(panel.vertices, axis=0)
+        pivot = np.asarray(pl.anchor if pl.anchor is not None else (0.5 * (lo[0] + hi[0]), hi[1]), float)
+        placement = replace(pl, offset=pl.offset * sy)
+    else:
+        pivot = np.zeros(2)
+        t = np.asarray(pl.translation, float)
+        placement = replace(pl, translation=(t[0] * sx, t[1] * sx, t[2] * sy)) if pl is not None else None
+    s = np.array([sx, sy])
+
+    def f(p):
+        return pivot + s * (p - pivot)
+
+    def edges(loop):
+        return tuple(replace(e, curve=_scale_curve(e.curve, f)) for e in loop)
+
+    return replace(panel, vertices=tuple(tuple(map(float, f(np.asarray(v, float)))) for v in panel.vertices),
+                   edges=edges(panel.edges), holes=tuple(edges(h) for h in panel.holes), placement=placement)
+
+
+def _match_seams(pattern, graded, scales):
+    """Limb panels sewn to trunk panels rescaled across until those seams are as long, relative to each
+    other, as in ``pattern`` (a sleeve cap to its armhole, a trouser leg's top to its waistband)."""
+    region = {p.name: _region(p.placement.landmark) if isinstance(p.placement, LandmarkPlacement) else "trunk"
+              for p in pattern.panels}
+    for panel in pattern.panels:
+        if region[panel.name] == "trunk":
+            continue
+        own = [(s.a, s.b) if s.a.panel == panel.name else (s.b, s.a) for s in pattern.seams
+               if (s.a.panel == panel.name) != (s.b.panel == panel.name)
+               and region[(s.b if s.a.panel == panel.name else s.a).panel] == "trunk"]
+        if not own:
+            continue
+        target = sum(graded.side_length(o) * pattern.side_length(m) / pattern.side_length(o) for m, o in own)
+        sx, sy = scales[panel.name]
+        lo, hi = 0.5, 2.0
+        for _ in range(40):  # the seam's length grows with the panel's width: bisect the factor
+            k = 0.5 * (lo + hi)
+            trial = replace(graded, panels=tuple(_scaled_panel(p, sx * k, sy) if p.name == panel.name else q
+                                                 for p, q in zip(pattern.panels, graded.panels)))
+            lo, hi = (k, hi) if sum(trial.side_length(m) for m, _ in own) < target else (lo, k)
+        graded = trial
+        scales[panel.name] = (sx * k, sy)
+    return graded
+
+
+def grade(pattern, body, design):
+    """``pattern`` graded from the ``design`` body's landmarks to ``body``'s (see the module docstring).
+
+    Returns
+    -------
+    (Pattern, dict)
+        The graded pattern (validated) and the (horizontal, vertical) scale of each panel.
+    """
+    from .pattern import validate_pattern
+
+    scales = grade_scales(pattern, body, design)
+    graded = replace(pattern, panels=tuple(_scaled_panel(p, *scales[p.name]) for p in pattern.panels))
+    graded = _match_seams(pattern, graded, scales)
+    return validate_pattern(graded), scales

@@ -4,6 +4,7 @@ import struct
 
 import numpy as np
 import pytest
+from conftest import PANELS
 
 from tailor.body import normalise_body
 from tailor.cli import main
@@ -138,3 +139,29 @@ def test_common_mesh_formats(tmp_path, mannequin, reference, suffix):
     body = read_body(f)
     assert body.report["units"] == "cm" and body.report["up"] == "y"
     assert find_landmarks(body.vertices, body.faces)["waist"].girth == pytest.approx(reference["waist"].girth, abs=0.003)
+
+
+def test_a_walk_from_another_tool_travels_and_the_garment_follows(tmp_path, capsys):
+    """OBJ frames in cm, Y up, off-centre, walking forward at 1.2 m/s, at 30 fps: read with --body-fps, not
+    re-centred per frame; the skirt goes along with it, outside it."""
+    import json
+
+    walk = read_body("mannequin-walk")
+    folder = tmp_path / "walk"
+    for i in range(12):
+        x = walk.frames[i % walk.frame_count] + [0.5, 2.0 - 1.2 * i / 30.0, 0.0]
+        write_obj(folder / f"f{i:03d}.obj", garmentcode_frame(x) * 100.0, walk.faces)
+    body = read_body(folder, fps=30)
+    assert body.fps == 30 and body.report["units"] == "cm" and body.report["up"] == "y"
+    travel = body.frames[-1].mean(axis=0) - body.frames[0].mean(axis=0)
+    assert travel[1] == pytest.approx(-1.2 * 11 / 30, abs=0.02) and abs(travel[0]) < 0.01
+    run = tmp_path / "run"
+    assert main(["-q", "drape", str(PANELS / "skirt.json"), "--body", str(folder), "--body-fps", "30", "--frames", "8",
+                 "--resolution", "10", "--quality", "draft", "--out", str(run)]) == 0
+    report = json.loads((run / "report.json").read_text())
+    assert report["body"]["fps"] == 30 and report["max_penetration_m"] <= 0.002
+    from tailor.io.obj import read_obj_vertices
+
+    first, last = (read_obj_vertices(run / f"garment_{k:04d}.obj") for k in (0, 7))
+    moved = last.mean(axis=0) - first.mean(axis=0)
+    assert moved[1] == pytest.approx(-1.2 * 7 / 25, abs=0.05)  # 7 frames at 25 fps of a 1.2 m/s walk

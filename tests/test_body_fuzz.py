@@ -96,3 +96,18 @@ def test_fuzzed_body_files_give_one_line_errors(tmp_path, capsys, small_body, ki
 @pytest.mark.parametrize("kind,seed", [c for i, c in enumerate(CASES) if i % 5])
 def test_all_200_fuzzed_body_files_give_one_line_errors(tmp_path, capsys, small_body, kind, seed):
     _check(tmp_path, capsys, small_body, kind, seed)
+
+
+@pytest.mark.parametrize("kind,seed", CASES[3::11])
+def test_fuzzed_body_files_give_one_line_errors_to_drape(tmp_path, capsys, small_body, kind, seed):
+    from conftest import PANELS
+
+    path = _fuzzed(kind, np.random.default_rng(seed), *small_body, tmp_path / f"{kind}_{seed}.obj")
+    capsys.readouterr()
+    rc = main(["-q", "drape", str(PANELS / "skirt.json"), "--body", str(path), "--frames", "1", "--resolution", "12",
+               "--quality", "draft", "--out", str(tmp_path / "run")])
+    err = capsys.readouterr().err.strip()
+    assert rc in (0, 2), (kind, seed, rc)
+    if rc == 2:
+        assert err.count("\n") == 0 and err.startswith("tailor: error:") and path.name in err, (kind, seed, err)
+        assert not (tmp_path / "run").exists()  # nothing half-written

@@ -43,7 +43,7 @@ from ..pattern import (
 from ..units import DEG, G_PER_M2, MM, PERCENT
 from ._fields import Node
 
-__all__ = ["read_pattern", "pattern_from_dict", "GARMENTCODE_TO_TAILOR"]
+__all__ = ["read_pattern", "pattern_from_dict", "reshaped_document", "GARMENTCODE_TO_TAILOR"]
 
 GARMENTCODE_TO_TAILOR = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 """Maps GarmentCode's world (Y up, facing +Z) to tailor's (Z up, facing −Y): (x, y, z) → (x, −z, y)."""
@@ -378,3 +378,54 @@ def _attachment(node: Node, index: int, panels: dict) -> Attachment:
     pname, edge, vertex, hole, lo, hi = _edge_ref(node, panels, vertex_ok=True)
     target = node.key("to").as_str(ATTACHMENT_TARGETS + LANDMARKS)
     return Attachment(pname, target, edge, vertex, hole, lo, hi, index)
+
+
+# -- writing a reshaped pattern back ----------------------------------------------------------------
+def _curve_params(curve: Curve, scale: float, relative: bool):
+    """The file's ``curvature.params`` of ``curve`` (file units, relative or absolute control points)."""
+    if curve.kind == "circle":
+        return [curve.radius / scale, bool(curve.large_arc), bool(curve.sweep)]
+    a, b = curve.start, curve.end
+    d = b - a
+    out = []
+    for q in curve.points[1:-1]:
+        q = np.asarray(q, float)
+        if relative:  # q = a + u·d + v·d⊥
+            u, v = np.linalg.solve(np.column_stack([d, [-d[1], d[0]]]), q - a)
+            out.append([float(u), float(v)])
+        else:
+            out.append([float(q[0] / scale), float(q[1] / scale)])
+    return out
+
+
+def _reshape_loop(node: dict, vertices, edges, scale: float, relative: bool) -> None:
+    node["vertices"] = [[x / scale, y / scale] for x, y in vertices]
+    for enode, edge in zip(node["edges"], edges):
+        if "curvature" in enode:
+            enode["curvature"]["params"] = _curve_params(edge.curve, scale, relative)
+
+
+def reshaped_document(doc: dict, pattern: Pattern) -> dict:
+    """A copy of the pattern document ``doc`` with the geometry of ``pattern`` (the same panels, edges and
+    seams reshaped, as :func:`tailor.sizing.grade` does): vertices, curvatures, placements' offsets and
+    translations. Everything else of the file (seams, fabrics, labels, parameters) is kept."""
+    import copy
+
+    out = copy.deepcopy(doc)
+    props = out.get("properties", {})
+    scale = 1.0 / float(props.get("units_in_meter", 100))
+    relative = props.get("curvature_coords", "relative") == "relative"
+    for name, node in out["pattern"]["panels"].items():
+        panel = pattern.panel(name)
+        _reshape_loop(node, panel.vertices, panel.edges, scale, relative)
+        for hnode, hole in zip(node.get("holes", []), panel.holes):
+            corners = [None] * len(hnode["vertices"])
+            for edge in hole:
+                corners[edge.endpoints[0]] = edge.curve.points[0]
+            _reshape_loop(hnode, corners, hole, scale, relative)
+        pl = panel.placement
+        if "placement" in node and isinstance(pl, LandmarkPlacement):
+            node["placement"]["offset"] = pl.offset / scale
+        elif "translation" in node and pl is not None:
+            node["translation"] = (GARMENTCODE_TO_TAILOR.T @ np.asarray(pl.translation) / scale).tolist()
+    return out
