@@ -15,7 +15,9 @@ from tailor.corpus import garment_pieces, makehuman_bodies, mannequin_variants, 
 from tailor.drape import drape
 from tailor.errors import TailorError
 from tailor.io import read_pattern
+from tailor.io.body_files import read_body
 from tailor.measure import measure_body
+from tailor.sizing import FitError, check_loops, grade
 
 PANELS = Path(__file__).resolve().parents[1] / "panels"
 
@@ -25,11 +27,17 @@ def run(body, garment, resolution, frames):
     frames_, faces, report = normalise_body(body.vertices, body.faces, source=body.name)
     b = Body(frames_, faces, 25.0, body.name, report)
     marks = measure_body(b)
-    result = drape(read_pattern(PANELS / f"{garment}.json"), b, frames=frames, resolution=resolution, quality="draft")
+    pattern, note = read_pattern(PANELS / f"{garment}.json"), ""
+    try:
+        check_loops(pattern, marks)
+    except FitError as exc:  # the one-line error a user sees; then the pattern graded to the body
+        note = f"graded ({str(exc).split(': ', 2)[1].split(' (')[0]} too small)"
+        pattern, _ = grade(pattern, marks, measure_body(read_body("mannequin")))
+    result = drape(pattern, b, frames=frames, resolution=resolution, quality="draft")
     x = result.frames[-1]
     return {"landmarks": len(marks), "wall": time.perf_counter() - t, "pen": 1000 * result.report["max_penetration_m"],
             "pieces": garment_pieces(result.weld[result.mesh.faces], int(result.weld.max()) + 1),
-            "where": misplaced(garment, x, marks) or "ok"}
+            "where": " ".join(filter(None, [misplaced(garment, x, marks) or "ok", note]))}
 
 
 def corpus(quick: bool):

@@ -207,7 +207,7 @@ def _cmd_body_make(args) -> int:
     base = MEASUREMENT_PRESETS[args.preset]
     m = with_measurements(base, height=args.height, bust=args.bust, waist=args.waist, hips=args.hips,
                           arm_length=args.arm_length, shoulder_width=args.shoulder_width, arm_angle=args.arm_angle,
-                          shoulder_slope=args.shoulder_slope)
+                          shoulder_slope=args.shoulder_slope, arm_forward=args.arm_forward, leg_spread=args.leg_spread)
     rest, walk = make_bodies(args.out, m, frames=args.frames)
     print(f"wrote {rest} and {walk} ({args.frames} frames, 1 s walk cycle)")
     return 0
@@ -604,7 +604,9 @@ def build_parser() -> argparse.ArgumentParser:
     bm.add_argument("--preset", default="default", choices=list(MEASUREMENT_PRESETS))
     for name in ("height", "bust", "waist", "hips", "arm-length", "shoulder-width"):
         bm.add_argument(f"--{name}", type=float, metavar="CM")
-    bm.add_argument("--arm-angle", type=float, metavar="DEG", help="arms below horizontal (default 45.5)")
+    bm.add_argument("--arm-angle", type=float, metavar="DEG", help="arms below horizontal (default 45.5; 0: T-pose)")
+    bm.add_argument("--arm-forward", type=float, metavar="DEG", help="arms swung forward (+) or back (-) (default 0)")
+    bm.add_argument("--leg-spread", type=float, metavar="DEG", help="each leg out from vertical (default 0; -5: knees together)")
     bm.add_argument("--shoulder-slope", type=float, metavar="DEG",
                     help="fall of the shoulder line from the neck to the shoulder tip (default 21.7)")
     bm.add_argument("--frames", type=int, default=25, help="frames of the 1 s walk (25 fps)")
