@@ -54,7 +54,7 @@ def main():
     ap.add_argument("--frames", type=int, default=3)
     args = ap.parse_args()
     res = 0.06 if args.quick else args.resolution / 100
-    print(f"| body | garment | landmarks | wall [s] | penetration [mm] | pieces | where |\n|---|---|---|---|---|---|---|")
+    print("| body | garment | landmarks | wall [s] | penetration [mm] | pieces | where |\n|---|---|---|---|---|---|---|")
     for body in corpus(args.quick):
         for garment in ("tshirt", "skirt"):
             try:

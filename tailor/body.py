@@ -121,8 +121,8 @@ def normalise_body(frames, faces, *, units: str = "auto", up: str = "auto", faci
     """
     frames, faces = check_body_arrays(frames, faces, source)
     count_in = frames.shape[1]
-    frames, faces, _ = weld(frames, faces)
-    frames, faces, dropped, _ = body_parts(frames, faces, source)
+    frames, faces = weld(frames, faces)
+    frames, faces, dropped = body_parts(frames, faces, source)
     rot, up_name = up_rotation(frames[0], faces, up, source)
     out = np.einsum("ij,tnj->tni", rot, frames)
     scale, unit_name = detect_units(float(np.ptp(out[0][:, 2])), units, source)

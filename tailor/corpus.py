@@ -24,13 +24,12 @@ from __future__ import annotations
 import gzip
 import importlib.util
 import json
-import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .mannequin import MEASUREMENT_PRESETS, Measurements, make_mannequin
+from .mannequin import MEASUREMENT_PRESETS, Measurements, make_mannequin, with_measurements
 from .units import CM, DEG
 
 __all__ = ["CorpusBody", "mannequin_variants", "perturbations", "makehuman_bodies", "makehuman_available",
@@ -62,9 +61,7 @@ class CorpusBody:
 
 
 def _woman(**cm):
-    base = MEASUREMENT_PRESETS["default"]
-    return replace(base, **{k: v * (DEG if k in ("arm_angle", "arm_forward", "leg_spread", "shoulder_slope") else CM)
-                            for k, v in cm.items()})
+    return with_measurements(MEASUREMENT_PRESETS["default"], **cm)
 
 
 VARIANTS = {
@@ -113,9 +110,9 @@ def mannequin_variants(names=None, *, resolution: float = 0.02, calibrate: int =
 
 
 def _rot(axis, angle):
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+    import trimesh
+
+    return trimesh.transformations.rotation_matrix(angle, axis)[:3, :3]
 
 
 def _normals(v, f):
@@ -358,13 +355,9 @@ def makehuman_bodies(names=None, poses=(0,)):
 
 def garment_pieces(faces, count: int) -> int:
     """Connected pieces of a garment mesh (one, once it is sewn): ``faces`` of its ``count`` vertices."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from .geometry import connected_components
 
-    faces = np.asarray(faces)
-    i, j = faces.ravel(), np.roll(faces, 1, axis=1).ravel()
-    _, label = connected_components(coo_matrix((np.ones(len(i)), (i, j)), shape=(count, count)), directed=False)
-    return len(np.unique(label[np.unique(faces)]))
+    return len(np.unique(connected_components(count, faces)[np.unique(faces)]))
 
 
 def misplaced(garment: str, x, marks) -> str:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import BodyError
+from .geometry import connected_components, face_areas
 from .sections import horizontal_outlines, second_moments
 
 __all__ = ["weld", "body_parts", "up_rotation", "detect_units", "trunk_frame", "foot_offsets", "forward", "UNITS", "AXES"]
@@ -39,27 +40,17 @@ SNAP = np.cos(np.radians(10.0))
 
 
 def weld(frames, faces):
-    """Merge vertices at the same place in the first frame; returns (frames, faces, kept vertex ids)."""
+    """Merge vertices at the same place in the first frame; returns (frames, faces)."""
     first = frames[0]
     scale = max(float(np.ptp(first, axis=0).max()), 1e-12)
     key = np.round(first / (scale * 1e-9)).astype(np.int64)
     _, keep, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     if len(keep) == len(first):
-        return frames, faces, np.arange(len(first))
+        return frames, faces
     order = np.argsort(keep)  # keep the file's vertex order
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
-    keep = keep[order]
-    return frames[:, keep], rank[inverse.ravel()][faces], keep
-
-
-def _components(n, faces):
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    i, j = faces.ravel(), np.roll(faces, 1, axis=1).ravel()
-    graph = coo_matrix((np.ones(len(i), np.int8), (i, j)), shape=(n, n))
-    return connected_components(graph, directed=False)
+    return frames[:, keep[order]], rank[inverse.ravel()][faces]
 
 
 def _part_boxes(vertices, label, count):
@@ -71,7 +62,7 @@ def _part_boxes(vertices, label, count):
 
 
 def body_parts(frames, faces, source="body"):
-    """Keep the body's parts: (frames, faces, dropped part count, kept vertex ids).
+    """Keep the body's parts: (frames, faces, how many small parts were dropped).
 
     Raises
     ------
@@ -82,9 +73,10 @@ def body_parts(frames, faces, source="body"):
     if not len(faces):
         raise BodyError(f"{source}: every face is degenerate (repeats a vertex)")
     x = frames[0]
-    count, label = _components(len(x), faces)
+    label = connected_components(len(x), faces)
+    count = int(label.max()) + 1
     tri = x[faces]
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    area = face_areas(x, faces)
     part_area = np.bincount(label[faces[:, 0]], weights=area, minlength=count)
     main = int(np.argmax(part_area))
     if part_area[main] <= 0:
@@ -106,7 +98,7 @@ def body_parts(frames, faces, source="body"):
     remap = np.full(len(x), -1)
     remap[used] = np.arange(len(used))
     dropped = int(np.count_nonzero(~keep_part & (part_area > 0)))
-    return frames[:, used], remap[faces], dropped, used
+    return frames[:, used], remap[faces], dropped
 
 
 def _minimal_rotation(u) -> np.ndarray:
@@ -152,9 +144,8 @@ def up_rotation(vertices, faces, up="auto", source="body"):
         u = np.zeros(3)
         u[AXES[name]] = -1.0 if up.startswith("-") else 1.0
         return _minimal_rotation(u), up.lstrip("+")
-    tri = vertices[faces]
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    centre = tri.mean(axis=1)
+    area = face_areas(vertices, faces)
+    centre = vertices[faces].mean(axis=1)
     mean = (area[:, None] * centre).sum(axis=0) / area.sum()
     d = centre - mean
     cov = (area[:, None, None] * d[:, :, None] * d[:, None, :]).sum(axis=0)
