@@ -230,13 +230,14 @@ def _cmd_body_render(args) -> int:
     return 0
 
 
-def _graded(pattern, body):
-    """``pattern`` graded from tailor's default mannequin (GarmentCode's mean body) to ``body``; prints the scales."""
-    from .io.body_files import read_body
+def _graded(pattern, body, design="mannequin"):
+    """``pattern`` graded from the ``design`` body (default: tailor's mannequin, GarmentCode's mean body) to
+    ``body``; prints the scales."""
+    from .io.body_files import design_landmarks
     from .measure import measure_body
     from .sizing import grade
 
-    graded, scales = grade(pattern, measure_body(body), measure_body(read_body("mannequin")))
+    graded, scales = grade(pattern, measure_body(body), design_landmarks(design))
     shown = ", ".join(f"{name} {sx:.2f}×{sy:.2f}" for name, (sx, sy) in scales.items())
     print(f"graded {pattern.source} to {body.report.get('source', body.name)} (across × along): {shown}")
     return graded, scales
@@ -257,7 +258,7 @@ def _cmd_grade(args) -> int:
         raise TailorError(f"{path}: cannot read the pattern: {exc}") from None
     pattern = pattern_from_dict(doc, source=path.name, name=path.stem)
     body = _read_body_args(args)
-    graded, _ = _graded(pattern, body)
+    graded, _ = _graded(pattern, body, args.design_body)
     for loop in check_loops(graded, measure_body(body)):
         print(f"  {loop.landmark:<16} loop {loop.length * 100:6.1f} cm, body {loop.girth * 100:6.1f} cm, ease {loop.ease * 100:+5.1f} cm")
     with atomic_write(args.out) as fh:
@@ -288,7 +289,7 @@ def _cmd_drape(args) -> int:
         raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
     body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base, fps=args.body_fps)
     if args.grade == "auto":
-        pattern, _ = _graded(pattern, body)
+        pattern, _ = _graded(pattern, body, args.design_body)
     fabric = None
     if args.fabric:
         from .fabric import preset
@@ -624,6 +625,7 @@ def build_parser() -> argparse.ArgumentParser:
     gr.add_argument("pattern", metavar="PATTERN")
     body_source(gr, option=True)
     gr.add_argument("--out", required=True, metavar="PATTERN.json")
+    gr.add_argument("--design-body", default="mannequin", metavar="BODY|YAML", help="the body the pattern was drafted for: a body file or name, or a GarmentCode measurement YAML (default: mannequin, GarmentCode's mean body)")
     gr.set_defaults(func=_cmd_grade)
 
     from .integrators import INTEGRATORS
@@ -638,6 +640,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--body-fps", type=float, metavar="FPS", help="frame rate of a moving body (default: the file's, else 25)")
     d.add_argument("--grade", choices=["none", "auto"], default="none",
                    help="auto: resize the pattern to the body first (its girths across, its lengths along)")
+    d.add_argument("--design-body", default="mannequin", metavar="BODY|YAML", help="the body the pattern was drafted for: a body file or name, or a GarmentCode measurement YAML (default: mannequin, GarmentCode's mean body)")
     d.add_argument("--fabric", choices=fabric_names(), help="override the pattern's fabric")
     d.add_argument("--frames", type=int, default=25, help="frames after dressing (default 25)")
     d.add_argument("--fps", type=float, default=25.0)

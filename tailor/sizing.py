@@ -8,9 +8,9 @@ later — so :func:`check_loops` says so before any simulation, naming the loop,
 the fix.
 
 :func:`grade` resizes a pattern to a body proportionally (a pattern maker's grading): the
-landmarks of the body the pattern was drafted for (the caller's; ``tailor`` uses its default
-mannequin, GarmentCode's mean body, since pattern files carry no body measurements) against the
-body's. Girths scale the panels across, lengths along, each region (trunk, arms, legs) by its own
+landmarks of the body the pattern was drafted for (the caller's: ``tailor`` takes its default
+mannequin, GarmentCode's mean body, or a body or GarmentCode measurement YAML given as
+``--design-body``, since pattern files carry no body measurements) against the body's. Girths scale the panels across, lengths along, each region (trunk, arms, legs) by its own
 ratio; a limb panel sewn to the trunk (a sleeve cap to its armhole, a trouser leg to its
 waistband) then gives way across until those seams are as long relative to each other as they
 were, so seams stay matched.

@@ -101,3 +101,26 @@ def test_cli_grade_writes_a_pattern_that_drapes_and_drape_grade_auto(tmp_path, h
                  "--frames", "1", "--resolution", "10", "--quality", "draft"]) == 0
     report = json.loads((run / "report.json").read_text())
     assert report["loops"]["waist"]["ease_cm"] > 0 and report["max_penetration_m"] <= 0.002
+
+
+def test_grading_from_the_design_body_it_was_drafted_for(tmp_path, heavy, design):
+    """A GarmentCode measurement YAML names the design body: the default's measurements grade like the default
+    mannequin, and a pattern graded from the target's own measurements hardly changes."""
+    from tailor.corpus import VARIANTS
+    from tailor.io.body_files import GARMENTCODE_BODY, design_landmarks
+    from tailor.units import CM, DEG
+
+    body, marks = heavy
+    m = VARIANTS["bmi-40"]
+    yaml_text = "body:\n" + "".join(
+        f"  {gc}: {getattr(m, ours) / (DEG if ours in ('arm_angle', 'shoulder_slope') else CM):.6g}\n"
+        for gc, ours in GARMENTCODE_BODY.items())
+    (tmp_path / "own.yaml").write_text(yaml_text)
+    pattern = read_pattern(PANELS / "skirt.json")
+    _, scales = grade(pattern, marks, design_landmarks(tmp_path / "own.yaml"))
+    for name, (sx, sy) in scales.items():
+        assert sx == pytest.approx(1.0, abs=0.04) and sy == pytest.approx(1.0, abs=0.04), name
+    (tmp_path / "bad.yaml").write_text("body:\n  waist: lots\n")
+    assert main(["grade", str(PANELS / "skirt.json"), "--body", "mannequin", "--design-body", str(tmp_path / "bad.yaml"),
+                 "--out", str(tmp_path / "x.json")]) == 2
+    assert not (tmp_path / "x.json").exists()

@@ -18,7 +18,8 @@ from ..errors import BodyError
 from .atomic import atomic_write
 from .pc2 import read_pc2
 
-__all__ = ["read_body", "write_body_npz", "make_bodies", "BODIES_DIR", "NAMED_BODIES", "read_pc2"]
+__all__ = ["read_body", "write_body_npz", "make_bodies", "read_measurements", "design_landmarks", "BODIES_DIR",
+           "NAMED_BODIES", "read_pc2", "GARMENTCODE_BODY"]
 
 BODIES_DIR = Path(__file__).resolve().parents[2] / "bodies"
 """The repository's ``bodies/`` folder (present in a source checkout)."""
@@ -170,3 +171,60 @@ def make_bodies(out_dir, measurements=None, *, frames: int = 25, fps: float = 25
     write_obj(rest_path, norm[0], faces, header="tailor parametric mannequin (tailor body make); metres, Z up, facing -Y")
     write_body_npz(walk_path, Body(norm[1:], faces, fps, "mannequin-walk"))
     return rest_path, walk_path
+
+
+GARMENTCODE_BODY = {
+    "height": "height", "bust": "bust", "underbust": "underbust", "waist": "waist", "hips": "hips",
+    "leg_circ": "thigh", "neck_w": "neck_width", "wrist": "wrist", "shoulder_w": "shoulder_width",
+    "arm_length": "arm_length", "arm_pose_angle": "arm_angle", "shoulder_incl": "shoulder_slope", "head_l": "head",
+    "bust_line": "shoulder_to_bust", "waist_line": "shoulder_to_waist", "hips_line": "waist_to_hips",
+    "crotch_hip_diff": "hips_to_crotch",
+}
+"""GarmentCode's body-measurement names (its YAML's ``body:`` block, cm and degrees) → :class:`~tailor.mannequin.Measurements`."""
+
+
+def read_measurements(path):
+    """The :class:`~tailor.mannequin.Measurements` of a GarmentCode body-measurement YAML file.
+
+    Names it does not give keep the default body's values; names tailor does not use are ignored.
+
+    Raises
+    ------
+    BodyError
+        One line naming the file and the field.
+    """
+    import yaml
+
+    from ..mannequin import MEASUREMENT_PRESETS, with_measurements
+
+    path = Path(path)
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise BodyError(f"{path.name}: cannot read the measurements: {str(exc).splitlines()[0]}") from None
+    block = doc.get("body", doc) if isinstance(doc, dict) else None
+    if not isinstance(block, dict):
+        raise BodyError(f"{path.name}: expected a 'body:' block of GarmentCode measurements (cm, degrees)")
+    values = {}
+    for name, field_name in GARMENTCODE_BODY.items():
+        if name in block:
+            value = block[name]
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise BodyError(f"{path.name}: body.{name}: expected a number, got {value!r}")
+            values[field_name] = float(value)
+    try:
+        return with_measurements(MEASUREMENT_PRESETS["default"], **values)
+    except BodyError as exc:
+        raise BodyError(f"{path.name}: {exc}") from None
+
+
+def design_landmarks(source="mannequin"):
+    """Landmarks of the body a pattern was drafted for: a body (file or name, as :func:`read_body`) or a
+    GarmentCode measurement YAML (its mannequin is generated). Default: tailor's mannequin, GarmentCode's mean body."""
+    from ..mannequin import make_mannequin
+    from ..measure import find_landmarks, measure_body
+
+    if str(source).lower().endswith((".yaml", ".yml")):
+        m = make_mannequin(read_measurements(source))
+        return find_landmarks(m.vertices, m.faces)
+    return measure_body(read_body(source))
