@@ -6,6 +6,7 @@ The public surface is exactly ``__all__``; everything else is an implementation 
 from .errors import (
     BodyError,
     FabricError,
+    FitError,
     MeshingError,
     PatternError,
     SeamError,
@@ -24,11 +25,12 @@ from .io.draw import draw_pattern
 from .io.export import FORMATS, export
 from .io.garment import write_drape
 from .io.preview import PreviewSettings, preview
-from .measure import Landmark, find_landmarks
+from .measure import Landmark, find_landmarks, measure_body
 from .mesh import GarmentMesh, discretise
 from .model import Model, State, build_model
 from .pattern import Pattern, validate_pattern
 from .sim import simulate
+from .sizing import check_loops, grade
 
 __version__ = "0.1.0"
 
@@ -58,6 +60,10 @@ __all__ = [
     "read_body",
     "Landmark",
     "find_landmarks",
+    "measure_body",
+    "check_loops",
+    "grade",
+    "FitError",
     "drape",
     "DrapeResult",
     "write_drape",

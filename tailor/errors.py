@@ -8,6 +8,7 @@ __all__ = [
     "TailorError",
     "PatternError",
     "SeamError",
+    "FitError",
     "FabricError",
     "MeshingError",
     "BodyError",
@@ -26,6 +27,10 @@ class PatternError(TailorError, ValueError):
 
 class SeamError(PatternError):
     """A seam references missing edges, sews an edge twice, or joins edges of incompatible length."""
+
+
+class FitError(PatternError):
+    """A pattern that cannot close round the body it is to dress (a loop shorter than the girth it goes round)."""
 
 
 class FabricError(TailorError, ValueError):

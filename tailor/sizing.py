@@ -23,17 +23,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import PatternError
+from .errors import FitError
 from .pattern import LandmarkPlacement
 
 __all__ = ["Loop", "pattern_loops", "check_loops", "NEGATIVE_EASE", "FitError", "grade", "grade_scales"]
 
 NEGATIVE_EASE = 0.05
 """Share by which a loop may be shorter than the girth it goes round (a snug, stretched fit)."""
-
-
-class FitError(PatternError):
-    """A pattern that cannot close round the body it is to dress."""
 
 
 @dataclass(frozen=True)
