@@ -176,7 +176,8 @@ def _normalisation_lines(r: dict):
     if "units" not in r:
         return
     fwd = ", ".join(f"{c:g}" for c in r.get("forward_in_file", ()))
-    yield f"units {r['units']}, up axis {r['up']}, facing {r['facing']} ({fwd} in the file) -> metres, Z up, facing -Y"
+    where = f" ({fwd} in the file)" if fwd else ""
+    yield f"units {r['units']}, up axis {r['up']}, facing {r['facing']}{where} -> metres, Z up, facing -Y"
     if "centre_shift_m" in r:
         sx, sy, _ = (100 * c for c in r["centre_shift_m"])
         yield f"moved {sx:+.1f}, {sy:+.1f} cm to put the trunk over the origin, feet on the floor"
@@ -590,7 +591,8 @@ def build_parser() -> argparse.ArgumentParser:
         else:
             parser.add_argument("body", metavar="BODY", help="mesh file, frame folder, npz, PC2, or mannequin / mannequin-walk")
         parser.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
-        parser.add_argument("--up", default="auto", choices=UP_CHOICES)
+        parser.add_argument("--up", default="auto", choices=UP_CHOICES,
+                            help="the file's axis that points up (a negative one as --up=-y)")
         parser.add_argument("--facing", default="auto", help="direction the body faces in its file: auto, -y, +z, ...")
         parser.add_argument("--base", help="base mesh of a PC2 point cache")
         parser.add_argument("--body-fps", type=float, metavar="FPS", help="frame rate of a moving body (default: the file's, else 25)")
@@ -634,7 +636,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("pattern", metavar="PATTERN")
     d.add_argument("--body", default="mannequin", help="mannequin (default), mannequin-walk, or a body file/folder")
     d.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
-    d.add_argument("--up", default="auto", choices=UP_CHOICES)
+    d.add_argument("--up", default="auto", choices=UP_CHOICES, help="the file's axis that points up (a negative one as --up=-y)")
     d.add_argument("--facing", default="auto")
     d.add_argument("--base", help="base mesh of a PC2 body")
     d.add_argument("--body-fps", type=float, metavar="FPS", help="frame rate of a moving body (default: the file's, else 25)")
