@@ -253,6 +253,8 @@ def _curve(node: Node, p0, p1, scale: float, relative: bool) -> Curve:
         params.as_list(length=3)
         r_node, large, sweep = params.items()
         radius = r_node.as_number(positive=True) * scale
+        if chord <= 1e-12:
+            node.fail("a circular arc needs two different end points (this edge starts and ends at the same place)")
         if radius < 0.5 * chord * (1.0 - 1e-6):
             r_node.fail(f"arc radius {radius / scale:g} is smaller than half the chord {0.5 * chord / scale:g}")
         return Curve("circle", (p0, p1), radius, large.as_bool(), sweep.as_bool())
