@@ -252,13 +252,11 @@ def limb_walls(pattern, landmarks, body_x=None) -> LimbWalls:
     A trouser leg's upper rows are rolled on cylinders wide enough to clear the hips, and the two
     legs' cylinders overlap between the legs; lower down, trouser legs are wider than legs and the
     two tubes meet at the midplane while their inseams close. Sewn freely, the crotch extensions
-    passed through each other (42 intersecting pairs at 4 cm) and a 2 cm mesh passed through the
-    other leg at the knees (320 pairs); the self-collision pass that starts once the garment is
-    sewn then held them crossed, and the 2 cm trousers stopped unstable walking. A garment's left and
-    right halves meet at the plane between the limbs: the drape keeps each leg's panels on their side
-    of it (:func:`tailor.drape.drape`). Both counts are now 0. Walking, the two legs' inner sides
-    still met there, scissored past each other with the thighs and tangled (57 pairs in one frame
-    at 1.5 cm, then the crotch tore to 5×): the walls now follow the body through the motion too.
+    and the knees of the two legs pass through each other, and the self-collision pass that starts
+    once the garment is sewn then holds them crossed. A garment's left and right halves meet at the
+    plane between the limbs: the drape keeps each leg's panels on their side of it
+    (:func:`tailor.drape.drape`). Walking, the legs' inner sides would scissor past each other with
+    the thighs, so the walls follow the body through the motion (docs/measurements.md).
     """
     index = np.full(len(pattern.panels), -1)
     walls: dict = {}

@@ -54,12 +54,10 @@ QUALITY = {
     "normal": Quality("normal", 0.02, 0.5, 1e-2),
     "final": Quality("final", IMPLICIT_STEP, 0.25, 1e-5),
 }
-"""Presets by name. On the 64 × 64 sphere drop (2 s) here, medians of five rounds side by side with Blender's
-cloth at quality 5 (7.9 s that day): draft 2.8 s (2.8× quicker), normal 5.0 s (1.9×), final 31 s; 128 × 128
-at normal 27.5–33.8 s (median 28.6 s of four runs); all resting within the thickness (0.8 mm clearance), no
-penetration. A CG tolerance of 1e-2 costs no accuracy there (the
-mean distance to ``final`` is 22 mm at 1e-2 and 26 mm at 1e-3 for Δt 0.02 s: the folds, set by the
-step, dominate), so draft and normal use it; ``final`` keeps 1e-5, the garment tests' setting."""
+"""Presets by name. A loose CG tolerance costs no accuracy on a drape, where the folds set by the
+step dominate the difference to ``final``, so draft and normal use 1e-2; ``final`` keeps 1e-5, the
+garment tests' setting. Speeds against Blender's cloth: docs/measurements.md and
+``benchmarks/compare_blender.py``."""
 
 
 def quality(name: str) -> Quality:

@@ -17,10 +17,9 @@ threshold distance from the cloth's vertices") runs in three stages:
    one Python object per cluster pair instead of per vertex–triangle pair). The candidates stay
    valid while no vertex has moved more than ``margin / 2`` relative to the cloth's centroid
    since the query (two points then approach by less than ``margin``). Swept boxes are tight
-   for cloth falling or swinging as a whole: an earlier query radius of ``margin`` plus twice the
-   step's largest displacement relative to the centroid (a pair that crossed lies no deeper)
-   grew to 9 cm on a cloth draping over a sphere, 1.4 M edge pairs (now 61 k), and the 48 × 48
-   sphere with self-collision ``auto`` at ``normal`` took 42–50 s (now 7–9.5 s; 3 s without).
+   for cloth falling or swinging as a whole, where one radius for every pair (``margin`` plus
+   twice the step's largest displacement relative to the centroid) grows with the fastest part
+   of the cloth and pairs everything with everything (docs/measurements.md has the numbers).
 3. **Narrow phase** (compiled): a vertex whose projection falls on a candidate triangle not at the
    vertex is a contact if it is nearer than ``thickness``, if its velocity would bring it nearer
    within the next step, or if it crossed the triangle's plane since the last step (judged by the
