@@ -12,7 +12,7 @@ from pathlib import Path
 
 from tailor.body import Body, normalise_body
 from tailor.corpus import garment_pieces, makehuman_bodies, mannequin_variants, misplaced, perturbations
-from tailor.drape import drape
+from tailor.dress import drape
 from tailor.errors import TailorError
 from tailor.io import read_pattern
 from tailor.io.body_files import read_body
@@ -35,7 +35,7 @@ def run(body, garment, resolution, frames):
         pattern, _ = grade(pattern, marks, measure_body(read_body("mannequin")))
     result = drape(pattern, b, frames=frames, resolution=resolution, quality="draft")
     x = result.frames[-1]
-    return {"landmarks": len(marks), "wall": time.perf_counter() - t, "pen": 1000 * result.report["max_penetration_m"],
+    return {"landmarks": len(marks), "wall": time.perf_counter() - t, "pen": 1000 * result.report.max_penetration_m,
             "pieces": garment_pieces(result.weld[result.mesh.faces], int(result.weld.max()) + 1),
             "where": " ".join(filter(None, [misplaced(garment, x, marks) or "ok", note]))}
 

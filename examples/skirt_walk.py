@@ -10,7 +10,7 @@ import os
 from pathlib import Path
 
 import tailor
-from tailor.drape import drape
+from tailor import drape
 from tailor.io.body_files import read_body
 from tailor.io.garment import write_drape
 
@@ -22,6 +22,6 @@ result = drape(pattern, body, frames=5 if quick else 25, resolution=0.04 if quic
 out = write_drape(result, Path("out") / "skirt_walk", overwrite=True, with_body=True)
 
 r = result.report
-print(f"{r['vertices']} vertices, sewn in {r['phases']['sewing']['simulated_s']:.2f} s of simulated time, "
-      f"max penetration {r['max_penetration_m'] * 1000:.1f} mm, {len(result.frames)} frames in {out}/ "
-      f"({r['wall_s']:.1f} s)")
+print(f"{r.vertices} vertices, sewn in {r.phases['sewing'].simulated_s:.2f} s of simulated time, "
+      f"max penetration {r.max_penetration_m * 1000:.1f} mm, {len(result.frames)} frames in {out}/ "
+      f"({r.wall_s:.1f} s)")

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 import tailor
-from tailor.drape import drape
+from tailor import drape
 from tailor.io.body_files import read_body
 from tailor.io.garment import write_drape
 from tailor.io.obj import write_obj
@@ -36,4 +36,4 @@ pattern = tailor.read_pattern(Path(__file__).resolve().parent.parent / "panels" 
 result = drape(pattern, body, frames=3 if quick else 25, resolution=0.04 if quick else 0.02)
 out = write_drape(result, Path("out") / "tshirt_on_my_body", overwrite=True)
 r = result.report
-print(f"{r['vertices']} vertices, max penetration {r['max_penetration_m'] * 1000:.1f} mm, {len(result.frames)} frames in {out}/")
+print(f"{r.vertices} vertices, max penetration {r.max_penetration_m * 1000:.1f} mm, {len(result.frames)} frames in {out}/")

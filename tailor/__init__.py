@@ -18,7 +18,7 @@ from .fabric import PRESETS, Fabric, preset
 from .io import pattern_from_dict, read_pattern
 from .batch import Job, drape_many
 from .body import Body
-from .drape import DrapeResult, drape
+from .dress import DrapeOptions, DrapeReport, DrapeResult, drape
 from .io.body_files import read_body
 from .io.animation import Animation, read_run
 from .io.draw import draw_pattern
@@ -66,6 +66,8 @@ __all__ = [
     "FitError",
     "drape",
     "DrapeResult",
+    "DrapeOptions",
+    "DrapeReport",
     "write_drape",
     "Animation",
     "read_run",

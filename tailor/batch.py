@@ -224,7 +224,7 @@ def _measures(report: dict, frames) -> dict:
 
 def run_job(job: Job, out) -> dict:
     """Run one job and write ``out/<job.id>/``; never raises: returns its manifest row."""
-    from .drape import drape
+    from .dress import drape
     from .io import read_pattern
     from .io.garment import write_drape
 
@@ -243,7 +243,7 @@ def run_job(job: Job, out) -> dict:
                        quality=job.option("quality"), self_collision=job.option("self_collision"),
                        sew_timeout=job.option("sew_timeout"), progress=progress)
         write_drape(result, Path(out) / job.id, overwrite=True, with_body=job.option("with_body"))
-        row.update(status="done", **_measures(result.report, len(result.frames)))
+        row.update(status="done", **_measures(result.report.to_json(), len(result.frames)))
     except TailorError as exc:
         row["reason"] = str(exc).splitlines()[0]
     except Exception as exc:  # a bug in one job must not stop the batch; the row keeps what it was

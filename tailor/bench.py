@@ -90,7 +90,7 @@ class GarmentScene:
 
     def run(self, resolution_mm, quality, frames):
         """(final positions, rest uv, panel per vertex, report) of one drape."""
-        from .drape import drape
+        from .dress import drape
         from .io import read_pattern
         from .io.body_files import read_body
 
@@ -268,8 +268,8 @@ def _garment_sweep(scene: GarmentScene, quick: bool, progress, start: int, total
                 run.stable, run.note = False, str(exc).split(":")[0]
             else:
                 run.final, run.uv = x, uv
-                run.steps, run.cg_iterations = report.get("steps", 0), report.get("cg_iterations", 0)
-                run.eq24_multiple = preset_q.step / report["time_step_eq24_s"]
+                run.steps, run.cg_iterations = report.steps, report.cg_iterations
+                run.eq24_multiple = preset_q.step / report.time_step_eq24_s
                 if k == 0:
                     ref = (uv, x, panel)
                 else:

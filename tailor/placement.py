@@ -255,7 +255,7 @@ def limb_walls(pattern, landmarks, body_x=None) -> LimbWalls:
     and the knees of the two legs pass through each other, and the self-collision pass that starts
     once the garment is sewn then holds them crossed. A garment's left and right halves meet at the
     plane between the limbs: the drape keeps each leg's panels on their side of it
-    (:func:`tailor.drape.drape`). Walking, the legs' inner sides would scissor past each other with
+    (:func:`tailor.dress.drape`). Walking, the legs' inner sides would scissor past each other with
     the thighs, so the walls follow the body through the motion (docs/measurements.md).
     """
     index = np.full(len(pattern.panels), -1)

@@ -11,21 +11,21 @@ from __future__ import annotations
 import functools
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import trimesh
 
-from .collide import BodyCollider, SelfCollider, SELF_COLLISION_MODES
+from .collide import BodyCollider
+from .contact import ContactPipeline, StaticBody, body_margin, check_self_collision
 from .curves import Curve
-from .errors import SimulationError
 from .fabric import Fabric, preset
 from .forces import total_forces
 from .mesh import GarmentMesh, discretise
 from .model import build_model
 from .pattern import Edge, Panel, Pattern
-from .integrators import Contacts, make_integrator
-from .sim import Guard, halved_steps, held_impulse, hold_contacts, simulate
+from .integrators import SolverSettings, make_integrator
+from .sim import Guard, simulate
 
 __all__ = ["Setup", "sphere_drop", "two_corner_hang", "SPHERE_FABRIC", "rectangle", "grid", "sphere", "floor", "run_scene", "SceneResult", "cloth_model"]
 
@@ -105,55 +105,42 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
     ``hooks(model, state, dt)`` run after the contact responses. Returns a :class:`SceneResult`
     whose report holds the wall time, steps, penetration and what the self-collision pass did.
     """
-    if self_collision not in SELF_COLLISION_MODES:
-        raise SimulationError(f"self_collision must be one of {', '.join(SELF_COLLISION_MODES)}, got {self_collision!r}")
+    check_self_collision(self_collision)
     t0 = time.perf_counter()
     x0 = np.asarray(x0, float)
     state = model.state(x0.copy(), None if v0 is None else np.asarray(v0, float).copy())
-    body_collider = None
-    if body is not None:
-        bv, bf = body
-        bv = np.asarray(bv, float)
-        body_collider = BodyCollider(bv[None], bf, margin=max(0.02, 2 * thickness))
-        body_vel = np.zeros_like(bv)
-    selfc = None
-    if self_collision != "off":
-        selfc = SelfCollider(model.faces, model.face_panel, x0, thickness=thickness, margin=margin, mode=self_collision,
-                             friction=friction)
-    inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
-    deepest = [0.0]
+    contacts = scene_contacts(model, x0, body, thickness=thickness, friction=friction, self_collision=self_collision,
+                              margin=margin)
     integ = make_integrator(integrator) if isinstance(integrator, str) else integrator
     if wind is not None:
         forces = forces or functools.partial(total_forces, wind=wind)
-        if hasattr(integ, "wind"):
-            integ.wind = wind
-    if body_collider is not None and hasattr(integ, "predict"):
-        integ.predict = lambda m, st, x, v, h, held: Contacts(*body_collider.landing(m, x, v, h, bv, body_vel, 0, thickness=thickness,
-                                                                                     skip=held), m.vertex_count)
-
-    def contact(model_, st, h):
-        if body_collider is not None:
-            deepest[0] = max(deepest[0], body_collider.respond(model_, st, h, bv, body_vel, 0, thickness=thickness,
-                                                                friction=friction, impulse=held_impulse(integ, model_)))
-            hold_contacts(integ, model_, body_collider.contact_set)
-        if selfc is not None:  # after the body: a layer the body pushed out pushes the next one (side memory)
-            selfc.respond(inv_mass, st, h)
-
+        integ.configure(replace(integ.settings, wind=wind))  # the solve treats drag relative to this air
     frames = []
-    steps = [0]
-
-    def count(model_, st, h):
-        steps[0] += 1
-
-    for _, st in simulate(model, state, duration=duration, frame_rate=fps, integrator=integ, dt=dt,
-                          hooks=[contact, *hooks, count], guard=guard or Guard(), forces=forces or total_forces):
+    stepper_steps = []
+    for _, st in simulate(model, state, duration=duration, frame_rate=fps, integrator=integ, dt=dt, contacts=contacts,
+                          hooks=[*hooks, lambda m, s_, h: stepper_steps.append(1)], guard=guard or Guard(),
+                          forces=forces or total_forces):
         frames.append(st.x.copy())
         if on_frame is not None:
             on_frame(len(frames) - 1, st)
-    report = {"wall_s": time.perf_counter() - t0, "steps": steps[0], "vertices": int(model.vertex_count),
-              "max_contact_correction_m": deepest[0],
-              "self_collision": selfc.report() if selfc is not None else {"mode": "off"}}
+    report = {"wall_s": time.perf_counter() - t0, "steps": len(stepper_steps), "vertices": int(model.vertex_count),
+              "max_contact_correction_m": contacts.deepest, "self_collision": contacts.self_report(),
+              "cg_iterations": integ.counters.iterations, "halved_steps": integ.counters.halved_steps()}
     return SceneResult(frames, model, report)
+
+
+def scene_contacts(model, x0, body, *, thickness: float, friction: float, self_collision: str, margin: float) -> ContactPipeline:
+    """The contact pipeline of cloth ``model`` at ``x0`` over a static ``body`` = (vertices, faces) or None."""
+    collider, motion = None, None
+    if body is not None:
+        bv = np.asarray(body[0], float)
+        collider = BodyCollider(bv[None], body[1], margin=body_margin(thickness))
+        motion = StaticBody(bv)
+    contacts = ContactPipeline(collider, motion, thickness=thickness, friction=friction, self_collision=self_collision,
+                               self_margin=margin)
+    if self_collision != "off":
+        contacts.self_collider(model, x0)  # its patches cut from the start positions
+    return contacts
 
 
 @dataclass
@@ -174,14 +161,11 @@ class Setup:
             self_collision: str = "off", guard: Guard | None = None, forces=None, v0=None, wind=None) -> SceneResult:
         """Simulate the scene; ``tolerance`` sets the implicit solver's relative residual."""
         integ = make_integrator(integrator)
-        if tolerance is not None and hasattr(integ, "tolerance"):
-            integ.tolerance = tolerance
-        result = run_scene(self.model, self.x0, body=self.body, duration=self.duration, fps=self.fps, integrator=integ,
-                           dt=dt, thickness=self.thickness, friction=self.friction, self_collision=self_collision,
-                           guard=guard, forces=forces, v0=v0, wind=wind)
-        result.report["cg_iterations"] = int(getattr(integ, "total_iterations", 0))
-        result.report["halved_steps"] = halved_steps(integ)
-        return result
+        if tolerance is not None:
+            integ.configure(SolverSettings(tolerance=tolerance))
+        return run_scene(self.model, self.x0, body=self.body, duration=self.duration, fps=self.fps, integrator=integ,
+                         dt=dt, thickness=self.thickness, friction=self.friction, self_collision=self_collision,
+                         guard=guard, forces=forces, v0=v0, wind=wind)
 
 
 SPHERE_FABRIC = Fabric("cotton-150", 0.15, 0.01, 0.01, 8.0, 0.4, 0.001)

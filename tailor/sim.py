@@ -1,8 +1,8 @@
 """The time-stepping driver and its stability guard.
 
-:func:`simulate` advances a :class:`~tailor.model.State` with an integrator, calls optional
-``hooks(model, state, dt)`` after every step (collisions, seams and attachments plug in here),
-checks the state, and yields one state per frame. It never writes files: the caller decides
+:class:`Stepper` advances a :class:`~tailor.model.State` with an integrator, runs the contact
+pipeline and optional ``hooks(model, state, dt)`` after every step, and checks the state;
+:func:`simulate` yields one state per frame. It never writes files: the caller decides
 what to do with frames. A state that goes non-finite, too fast, or stretched beyond anything
 cloth survives raises :class:`~tailor.errors.SimulationUnstable` naming the time, the frame,
 the step and a remedy — so no NaN or exploded frame ever leaves the simulator.
@@ -19,9 +19,9 @@ import numpy as np
 from .errors import SimulationUnstable
 from .forces import total_forces
 from .forces.membrane import face_stretch
-from .integrators import Contacts, make_integrator
+from .integrators import make_integrator
 
-__all__ = ["Quality", "QUALITY", "Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP", "held_impulse", "hold_contacts", "halved_steps"]
+__all__ = ["Quality", "QUALITY", "Guard", "check_state", "simulate", "run", "max_stretch", "IMPLICIT_STEP", "Stepper", "quality"]
 
 IMPLICIT_STEP = 0.01
 """Default step of the implicit integrator [s]: stable far beyond Eq. 24, four steps per 25 fps frame."""
@@ -122,8 +122,81 @@ def check_state(model, state, *, step: int, dt: float, integrator: str = "?", fr
             )
 
 
+class Stepper:
+    """Advances a cloth by an integrator's steps, every contact after each, the guard watching.
+
+    The one step loop of :func:`simulate`, :func:`tailor.scenes.run_scene`,
+    :func:`tailor.tearing.simulate_tearing` and :func:`tailor.dress.drape`: a step holds the body contacts
+    the last response left resting (implicit integrators), the :class:`~tailor.contact.ContactPipeline`
+    responds, then the ``hooks(model, state, dt)`` run; :meth:`advance` covers a span exactly.
+
+    Parameters
+    ----------
+    integrator : Integrator
+    forces : callable ``forces(model, state) -> (N, 3)``
+    contacts : ContactPipeline, optional
+    hooks : sequence of callables ``hook(model, state, dt)``, run after the contacts
+    guard : Guard
+    """
+
+    def __init__(self, integrator, *, forces=total_forces, contacts=None, hooks=(), guard: Guard = Guard()):
+        self.integrator = integrator
+        self.forces = forces
+        self.contacts = contacts
+        self.hooks = tuple(hooks)
+        self.guard = guard
+        self.steps = 0
+
+    def configure(self, *, forces=None, guard: Guard | None = None) -> None:
+        """The forces and the guard of the steps to come (a new phase, or a renumbered cloth)."""
+        if forces is not None:
+            self.forces = forces
+        if guard is not None:
+            self.guard = guard
+
+    def step(self, model, state, h: float):
+        """One step of ``h`` and every response after it; the new state."""
+        pipe = self.contacts
+        if pipe is None:
+            result = self.integrator.step(model, state, h, self.forces)
+        else:
+            result = self.integrator.step(model, state, h, self.forces, contacts=pipe.hold(model), predict=pipe.predict)
+            pipe.respond(model, result.state, h, result.impulses)
+        for hook in self.hooks:
+            hook(model, result.state, h)
+        self.steps += 1
+        return result.state
+
+    def advance(self, model, state, duration: float, dt: float | None = None, *, frame: int | None = None):
+        """``state`` advanced by ``duration`` s in equal steps of at most ``dt`` (default: the
+        integrator's, :meth:`time_step`); the time of the result is exactly the start plus ``duration``."""
+        h, substeps = self.substeps(model, duration, dt)
+        name = self.integrator.name
+        start = state.t
+        check_state(model, state, step=0, dt=h, integrator=name, frame=frame, guard=self.guard)
+        for k in range(1, substeps + 1):
+            state = self.step(model, state, h)
+            check_state(model, state, step=k, dt=h, integrator=name, frame=frame, guard=self.guard,
+                        strain=k % self.guard.strain_every == 0)
+        check_state(model, state, step=substeps, dt=h, integrator=name, frame=frame, guard=self.guard)
+        state.t = start + duration
+        return state
+
+    def time_step(self, model, span: float) -> float:
+        """The step when none is asked for: Eq. 24's for explicit integrators, else :data:`IMPLICIT_STEP`."""
+        return model.time_step if self.integrator.explicit else min(IMPLICIT_STEP, span)
+
+    def substeps(self, model, span: float, dt: float | None):
+        """(step, count): equal steps of at most ``dt`` covering ``span``."""
+        dt = self.time_step(model, span) if dt is None else dt
+        if not (dt > 0 and math.isfinite(dt)):
+            raise ValueError(f"time step must be positive, got {dt!r}")
+        count = max(1, math.ceil(span / dt - 1e-9))
+        return span / count, count
+
+
 def simulate(model, state, *, duration: float, frame_rate: float = 25.0, integrator="symplectic", dt: float | None = None,
-             hooks=(), forces=total_forces, guard: Guard = Guard(), progress=None):
+             hooks=(), forces=total_forces, guard: Guard = Guard(), progress=None, contacts=None):
     """Advance ``state`` for ``duration`` seconds, yielding ``(frame index, State)`` at each frame.
 
     Frame 0 is the initial state. Steps per frame are chosen so frames fall exactly on
@@ -133,42 +206,29 @@ def simulate(model, state, *, duration: float, frame_rate: float = 25.0, integra
 
     Parameters
     ----------
-    integrator : str or integrator object
+    integrator : str or Integrator
         See :mod:`tailor.integrators`.
     hooks : sequence of callables ``hook(model, state, dt)``
-        Applied in order after every step; they may modify ``state`` in place.
+        Applied in order after every step (after ``contacts``); they may modify ``state`` in place.
     forces : callable ``forces(model, state) -> (N, 3)``
     progress : callable ``progress(frame, frame_count, state)``, optional
+    contacts : :class:`~tailor.contact.ContactPipeline`, optional
     """
     integ = make_integrator(integrator) if isinstance(integrator, str) else integrator
-    name = getattr(integ, "name", "?")
-    adapt = dt is None and getattr(integ, "explicit", True)  # Eq. 24 step, kept stable as the cloth stretches
-    if dt is None:
-        dt = model.time_step if getattr(integ, "explicit", True) else min(IMPLICIT_STEP, 1.0 / frame_rate)
-    if not (dt > 0 and math.isfinite(dt)):
-        raise ValueError(f"time step must be positive, got {dt!r}")
+    stepper = Stepper(integ, forces=forces, contacts=contacts, hooks=hooks, guard=guard)
     frame_dt = 1.0 / frame_rate
-    substeps = max(1, math.ceil(frame_dt / dt - 1e-9))
-    h = frame_dt / substeps
-    frames = int(round(duration * frame_rate))
-    check_state(model, state, step=0, dt=h, integrator=name, frame=0, guard=guard)
+    adapt = dt is None and integ.explicit  # Eq. 24 step, kept stable as the cloth stretches
+    h, _ = stepper.substeps(model, frame_dt, dt)
+    check_state(model, state, step=0, dt=h, integrator=integ.name, frame=0, guard=guard)
     yield 0, state
-    step = 0
+    frames = int(round(duration * frame_rate))
     for frame in range(1, frames + 1):
-        for _ in range(substeps):
-            state = integ.step(model, state, h, forces)
-            for hook in hooks:
-                hook(model, state, h)
-            step += 1
-            check_state(model, state, step=step, dt=h, integrator=name, frame=frame, guard=guard,
-                        strain=step % guard.strain_every == 0)
-        check_state(model, state, step=step, dt=h, integrator=name, frame=frame, guard=guard)
+        state = stepper.advance(model, state, frame_dt, h, frame=frame)
         if adapt and model.face_count:
             # Eq. 24 uses the rest stiffness; a Green-strain membrane stretched s times is stiffer,
             # its tangent modulus (3s² − 1)/2 times the rest one, so its waves are faster by the root
             s = max_stretch(model, state.x)
-            substeps = max(1, math.ceil(frame_dt * math.sqrt(max(1.0, 0.5 * (3.0 * s * s - 1.0))) / dt - 1e-9))
-            h = frame_dt / substeps
+            h = frame_dt / max(1, math.ceil(frame_dt * math.sqrt(max(1.0, 0.5 * (3.0 * s * s - 1.0))) / model.time_step - 1e-9))
         if progress is not None:
             progress(frame, frames, state)
         yield frame, state
@@ -180,26 +240,3 @@ def run(model, state, **kwargs):
     for _, final in simulate(model, state, **kwargs):  # noqa: B007 - the loop keeps the last state
         continue
     return final
-
-
-def halved_steps(integ) -> dict:
-    """How often an implicit integrator took a step as two halves, by cause (zeros for explicit ones)."""
-    return {"unconverged": int(getattr(integ, "halvings", 0)), "overstretch": int(getattr(integ, "stretch_halvings", 0))}
-
-
-def held_impulse(integ, model):
-    """(N,) normal impulse [N·s] the implicit solve gave the contacts it held (None if it held none)."""
-    ids = getattr(integ, "contact_ids", None)
-    if ids is None or not len(ids) or integ.contact_vertex_count != model.vertex_count:
-        return None
-    out = np.zeros(model.vertex_count)
-    out[ids] = integ.contact_impulse
-    return out
-
-
-def hold_contacts(integ, model, contact_set) -> None:
-    """Hand body contacts (ids, normals, body normal velocity, stuck, body velocity, μ) to an implicit
-    integrator for its next step."""
-    if hasattr(integ, "contacts"):
-        ids, normals, vn, stuck, vb, mu = contact_set
-        integ.contacts = Contacts(ids, normals, vn, model.vertex_count, stick=stuck, body_velocity=vb, friction=mu)

@@ -21,6 +21,7 @@ the mesh splits along them exactly as a tear does (mass and momentum exact).
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from dataclasses import dataclass, replace
@@ -29,10 +30,12 @@ import numpy as np
 
 from .errors import SimulationError
 from .forces import total_forces
+from .collide import BodyCollider
+from .contact import ContactPipeline, StaticBody, body_margin
 from .integrators import make_integrator
-from .sim import Guard, check_state
+from .sim import Guard, Stepper, check_state
 
-__all__ = ["Cut", "TearableCloth", "simulate_tearing", "boundary_loops", "TEAR_RATIO"]
+__all__ = ["Cut", "TearableCloth", "simulate_tearing", "boundary_loops", "TEAR_RATIO", "TEAR_STEP"]
 
 log = logging.getLogger(__name__)
 
@@ -211,6 +214,18 @@ class TearableCloth:
         use = np.bincount(self._face_edge.ravel(), minlength=len(self._edges))
         self._interior = use == 2
 
+    def change(self, state, pending: list, *, t0: float = 0.0, tol: float = 1e-12):
+        """Make the cuts of ``pending`` (sorted by time, counted from ``t0``) that are due at ``state.t``
+        (removing them), then tear; returns (state, whether the mesh changed)."""
+        before = self.mesh
+        while pending and pending[0].time <= state.t - t0 + tol:
+            state = self.cut(state, pending.pop(0))
+        torn = self.tear(state)
+        state = torn if torn is not None else state
+        if not self.mesh.face_count:
+            raise SimulationError(f"at t = {state.t:.3f} s no cloth is left (every triangle was cut away)")
+        return state, self.mesh is not before
+
     # -- tearing ------------------------------------------------------------------------------
     def across_stretch(self, x) -> np.ndarray:
         """Stretch of the cloth across each (face, local edge), shape (F, 3) (1 = rest)."""
@@ -357,67 +372,45 @@ class TearableCloth:
         return cls(np.asarray(state.x)[src_w].copy(), np.asarray(state.v)[src_w].copy(), state.t)
 
 
+TEAR_STEP = 0.005
+"""Default implicit step [s] of :func:`simulate_tearing`: a crack runs on by one check per step, so
+the step sets how fast it can run (half :data:`tailor.sim.IMPLICIT_STEP`)."""
+
+
 def simulate_tearing(cloth: TearableCloth, state, *, duration: float, fps: float = 25.0, integrator: str = "implicit",
                      dt: float | None = None, wind=None, cuts=(), hooks=(), body=None, thickness: float = 0.002,
                      friction: float = 0.4, guard: Guard | None = None):
     """Advance a :class:`TearableCloth` for ``duration`` s, yielding ``(frame, state)`` every 1/fps s.
 
-    After every step the body (``(vertices, faces)``, static) pushes the cloth out (Eq. 9–14), the
-    hooks run (``hook(model, state, dt)``), due cuts are made and the cloth may tear; a change
-    rebuilds the model (``cloth.model``, ``cloth.mesh``: read them with each frame, the topology
-    changes). ``wind`` is a :class:`tailor.forces.wind.Wind` or an air velocity.
+    After every step the contacts respond (a static body ``(vertices, faces)``, Eq. 9–14, through
+    the :class:`~tailor.contact.ContactPipeline`), the hooks run (``hook(model, state, dt)``), due
+    cuts are made and the cloth may tear; a change rebuilds the model (``cloth.model``,
+    ``cloth.mesh``: read them with each frame, the topology changes) and the integrator and the
+    contacts forget what they knew per vertex. ``wind`` is a :class:`tailor.forces.wind.Wind` or
+    an air velocity.
     """
     guard = guard or Guard()
+    contacts = None
     if body is not None:
-        from .collide import BodyCollider
-
-        bx, bf = np.asarray(body[0], float), body[1]
-        collider = BodyCollider(bx[None], bf, margin=max(0.02, 2 * thickness))
-        still = np.zeros_like(bx)
-
-        def contact(model_, st, h_):
-            collider.respond(model_, st, h_, bx, still, 0, thickness=thickness, friction=friction)
-
-        hooks = (contact, *hooks)
+        bx = np.asarray(body[0], float)
+        contacts = ContactPipeline(BodyCollider(bx[None], body[1], margin=body_margin(thickness)), StaticBody(bx),
+                                   thickness=thickness, friction=friction)
+    integ = make_integrator(integrator)
+    integ.configure(replace(integ.settings, wind=wind))  # the solve treats drag relative to this air
+    stepper = Stepper(integ, forces=functools.partial(total_forces, wind=wind), contacts=contacts, hooks=hooks, guard=guard)
     frame_dt = 1.0 / fps
-    model = cloth.model
-
-    def fresh():
-        it = make_integrator(integrator)
-        if hasattr(it, "wind"):
-            it.wind = wind
-        return it
-
-    integ = fresh()
-    if dt is None:
-        dt = model.time_step if integ.explicit else min(0.005, frame_dt)
-    substeps = max(1, math.ceil(frame_dt / dt - 1e-9))
-    h = frame_dt / substeps
+    h, substeps = stepper.substeps(cloth.model, frame_dt, min(TEAR_STEP, frame_dt) if dt is None and not integ.explicit else dt)
     pending = sorted(cuts, key=lambda c: c.time)
-
-    def forces(m, s):
-        return total_forces(m, s, wind=wind)
-
-    check_state(model, state, step=0, dt=h, integrator=integ.name, frame=0, guard=guard)
+    check_state(cloth.model, state, step=0, dt=h, integrator=integ.name, frame=0, guard=guard)
     yield 0, state
-    step = 0
     for frame in range(1, int(round(duration * fps)) + 1):
-        for _ in range(substeps):
-            state = integ.step(cloth.model, state, h, forces)
-            for hook in hooks:
-                hook(cloth.model, state, h)
-            step += 1
-            changed = False
-            while pending and pending[0].time <= state.t + 1e-12:
-                state = cloth.cut(state, pending.pop(0))
-                changed = True
-            torn = cloth.tear(state)
-            if torn is not None:
-                state, changed = torn, True
-            if changed:
-                integ = fresh()  # its caches belong to the old model
-            if not cloth.mesh.face_count:
-                raise SimulationError(f"at t = {state.t:.3f} s no cloth is left (every triangle was cut away)")
-            check_state(cloth.model, state, step=step, dt=h, integrator=integ.name, frame=frame, guard=guard,
+        for k in range(substeps):
+            state = stepper.step(cloth.model, state, h)
+            state, changed = cloth.change(state, pending)
+            if changed:  # what the integrator and the contacts knew per vertex belongs to the old mesh
+                integ.reset()
+                if contacts is not None:
+                    contacts.forget()
+            check_state(cloth.model, state, step=k + 1, dt=h, integrator=integ.name, frame=frame, guard=guard,
                         strain=False)
         yield frame, state

@@ -213,98 +213,79 @@ def _table(title, labels, matrix) -> str:
                           for a, row in zip(labels, matrix))
 
 
+@dataclass(frozen=True)
+class _Plan:
+    """What one ``tailor validate`` runs."""
+
+    quick: bool
+    sizes: tuple
+    scenes: tuple
+    fabrics: tuple
+    models: tuple
+    default_models: tuple
+    duration: float
+    cusick_fabrics: tuple
+    cusick_s: float
+
+    @classmethod
+    def of(cls, quick: bool, models) -> "_Plan":
+        default = ("kes5", "auto") if quick else MODELS
+        models = default if models is None else tuple(models)
+        for m in models:
+            bottino_fabric("A", m)  # an unknown model is an error before anything runs
+        return cls(quick, (11, 21) if quick else (11, 21, 31),
+                   ("sphere", "hang") if quick else ("sphere", "cube80", "cube128", "cube55", "hang"),
+                   ("A",) if quick else ("A", "B"), models, default, 1.2 if quick else 2.0,
+                   ("silk", "cotton", "denim") if quick else tuple(PRESETS), 2.0 if quick else 3.0)
+
+    @property
+    def jobs(self) -> list:
+        """(scene, fabric, model, n, mesh kind) of every patch run."""
+        jobs = [(s, f, mo, n, "grid") for s in self.scenes for f in self.fabrics for mo in self.models for n in self.sizes]
+        return jobs + [(s, f, "kes5", n, "triangle") for s in self.scenes[:1] for f in self.fabrics for n in self.sizes]
+
+
+class _Tally:
+    """Runs done of a total, told to ``progress(done, total, text)``."""
+
+    def __init__(self, progress, total: int):
+        self.progress, self.total, self.done = progress, total, 0
+
+    def __call__(self, text: str) -> None:
+        self.done += 1
+        if self.progress:
+            self.progress(self.done, self.total, text)
+
+
 def validate(out, *, quick: bool = False, progress=None, models=None) -> Path:
     """Run the validation scenes and write ``out/validation.md`` and its pictures; returns the report path."""
     from .io.atomic import write_text_atomic
-    from .io.plots import shadow_plot
-    from .io.render import render_views
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    sizes = (11, 21) if quick else (11, 21, 31)
-    scenes = ("sphere", "hang") if quick else ("sphere", "cube80", "cube128", "cube55", "hang")
-    fabrics = ("A",) if quick else ("A", "B")
-    default = ("kes5", "auto") if quick else MODELS
-    models = default if models is None else tuple(models)
-    for m in models:
-        bottino_fabric("A", m)  # an unknown model is an error before anything runs
-    duration = 1.2 if quick else 2.0
-    jobs = [(s, f, mo, n, "grid") for s in scenes for f in fabrics for mo in models for n in sizes]
-    jobs += [(s, f, "kes5", n, "triangle") for s in scenes[:1] for f in fabrics for n in sizes]
-    cusick_fabrics = ("silk", "cotton", "denim") if quick else tuple(PRESETS)
-    total = len(jobs) + len(cusick_fabrics)
-    runs, done = {}, 0
+    plan = _Plan.of(quick, models)
+    tally = _Tally(progress, len(plan.jobs) + len(plan.cusick_fabrics))
     t_all = time.perf_counter()
     failed = []
-    for key in jobs:
+    runs = {}
+    for key in plan.jobs:
         scene, fab, model, n, mesh_kind = key
         try:
-            runs[key] = _run_patch(scene, bottino_fabric(fab, model), n, mesh_kind, duration)
+            runs[key] = _run_patch(scene, bottino_fabric(fab, model), n, mesh_kind, plan.duration)
         except SimulationUnstable as exc:  # one case must not cost the report: it says so instead
             runs[key] = None
             failed.append(f"{scene}, fabric {fab}, {model}, n = {n} ({mesh_kind}): {exc}")
-        done += 1
-        if progress:
-            progress(done, total, f"{scene} {fab} {model} n={n} {mesh_kind}")
+        tally(f"{scene} {fab} {model} n={n} {mesh_kind}")
+    models_arg = '' if plan.models == plan.default_models else ' --models ' + ','.join(plan.models)
     lines = ["# Validation: Bottino et al.'s drape experiments and the Cusick drape test\n",
-             f"Written by `tailor validate{' --quick' if quick else ''}{'' if models == default else ' --models ' + ','.join(models)}`. Bottino's metric: the mean distance [mm] "
+             f"Written by `tailor validate{' --quick' if quick else ''}{models_arg}`. Bottino's metric: the mean distance [mm] "
              "between corresponding points (same rest position on the patch) of two settled shapes. "
-             f"Patch 20 × 20 cm, {duration:g} s of settling, implicit Euler at 5 ms.\n"]
-    pictures = []
-    for scene in scenes:
+             f"Patch 20 × 20 cm, {plan.duration:g} s of settling, implicit Euler at 5 ms.\n"]
+    for scene in plan.scenes:
         lines.append(f"\n## {scene}\n")
-        for fab in fabrics:
-            labels = [str(n) for n in sizes]
-            for model in models:
-                m = [[None if i == j else _mm(runs[(scene, fab, model, a, "grid")], runs[(scene, fab, model, b, "grid")])
-                      for j, b in enumerate(sizes)] for i, a in enumerate(sizes)]
-                lines.append(f"\nFabric {fab}, {model}: grid resolution against resolution (mm)\n\n")
-                lines.append(_table("n", labels, m))
-            n = sizes[-1]
-            m = [[None if i == j else _mm(runs[(scene, fab, a, n, "grid")], runs[(scene, fab, b, n, "grid")])
-                  for j, b in enumerate(models)] for i, a in enumerate(models)]
-            lines.append(f"\nFabric {fab}, n = {n}: model against model (mm)\n\n")
-            lines.append(_table("model", list(models), m))
-            if scene == scenes[0]:
-                tri = [_mm(runs[(scene, fab, "kes5", k, "grid")], runs[(scene, fab, "kes5", k, "triangle")]) for k in sizes]
-                lines.append(f"\nFabric {fab}, kes5: grid against Triangle mesh of the same size (mm): "
-                             + ", ".join(f"n = {k}: {_cell(v)}" for k, v in zip(sizes, tri)) + "\n")
-            if runs[(scene, fab, "kes5", n, "grid")] is None:
-                continue
-            mesh, x, _ = runs[(scene, fab, "kes5", n, "grid")]
-            meshes = [(x, mesh.faces, (0.8, 0.3, 0.3))]
-            if scene != "hang":
-                setup = patch_scene(scene, bottino_fabric(fab, "kes5"), 3)
-                meshes.insert(0, (setup.body[0], setup.body[1], (0.7, 0.7, 0.75)))
-            else:
-                sag = np.ptp(x[:, 2]) * 1e3
-                lines.append(f"\nFabric {fab}: height of the hanging patch {sag:.1f} mm at n = {n}; by resolution: "
-                             + ", ".join(f"{k}: {np.ptp(runs[(scene, fab, 'kes5', k, 'grid')][1][:, 2]) * 1e3:.1f}"
-                                         for k in sizes if runs[(scene, fab, 'kes5', k, 'grid')] is not None) + "\n")
-            pic = out / f"validation_{scene}_{fab}.png"
-            render_views(pic, meshes, size=(6, 3), title=f"{scene}, fabric {fab}, n = {n}")
-            pictures.append(pic)
-            lines.append(f"\n![{scene} fabric {fab}]({pic.name})\n")
-    cusick_s = 2.0 if quick else 3.0
-    lines.append(f"\n## Cusick drape test\n\n30 cm specimen clamped on an 18 cm disk, settled {cusick_s:g} s; "
-                 "DC = (shadow − disk) / (specimen − disk).\n\n| fabric | bending c | DC | nodes | wall s |\n|---|---|---|---|---|\n")
-    results = []
-    for name in cusick_fabrics:
-        try:
-            r = cusick(preset(name), resolution=0.02 if quick else 0.01, duration=cusick_s)
-        except SimulationUnstable as exc:
-            failed.append(f"Cusick, {name}: {exc}")
-            lines.append(f"| {name} | {preset(name).bending:g} | unstable | | |\n")
-            continue
-        finally:
-            done += 1
-            if progress:
-                progress(done, total, f"cusick {name}")
-        results.append(r)
-        lines.append(f"| {name} | {preset(name).bending:g} | {r.drape_coefficient:.3f} | {r.nodes} | {r.wall_s:.1f} |\n")
-    pic = out / "validation_cusick.png"
-    shadow_plot(pic, results)
-    lines.append(f"\n![drape shadows]({pic.name})\n")
+        for fab in plan.fabrics:
+            lines += _scene_section(out, plan, scene, fab, runs)
+    lines += _cusick_section(out, plan, failed, tally)
     if failed:
         lines.append("\n## Runs that stopped\n\nEach stopped with `SimulationUnstable` (its table cells read —):\n\n"
                      + "".join(f"- {f}\n" for f in failed))
@@ -312,3 +293,65 @@ def validate(out, *, quick: bool = False, progress=None, models=None) -> Path:
     report = out / "validation.md"
     write_text_atomic(report, "".join(lines))
     return report
+
+
+def _scene_section(out, plan: _Plan, scene: str, fab: str, runs) -> list:
+    """Tables of one scene and fabric (resolution against resolution, model against model) and its picture."""
+    from .io.render import render_views
+
+    sizes, models, lines = plan.sizes, plan.models, []
+    labels = [str(n) for n in sizes]
+    for model in models:
+        m = [[None if i == j else _mm(runs[(scene, fab, model, a, "grid")], runs[(scene, fab, model, b, "grid")])
+              for j, b in enumerate(sizes)] for i, a in enumerate(sizes)]
+        lines.append(f"\nFabric {fab}, {model}: grid resolution against resolution (mm)\n\n")
+        lines.append(_table("n", labels, m))
+    n = sizes[-1]
+    m = [[None if i == j else _mm(runs[(scene, fab, a, n, "grid")], runs[(scene, fab, b, n, "grid")])
+          for j, b in enumerate(models)] for i, a in enumerate(models)]
+    lines.append(f"\nFabric {fab}, n = {n}: model against model (mm)\n\n")
+    lines.append(_table("model", list(models), m))
+    if scene == plan.scenes[0]:
+        tri = [_mm(runs[(scene, fab, "kes5", k, "grid")], runs[(scene, fab, "kes5", k, "triangle")]) for k in sizes]
+        lines.append(f"\nFabric {fab}, kes5: grid against Triangle mesh of the same size (mm): "
+                     + ", ".join(f"n = {k}: {_cell(v)}" for k, v in zip(sizes, tri)) + "\n")
+    if runs[(scene, fab, "kes5", n, "grid")] is None:
+        return lines
+    mesh, x, _ = runs[(scene, fab, "kes5", n, "grid")]
+    meshes = [(x, mesh.faces, (0.8, 0.3, 0.3))]
+    if scene != "hang":
+        setup = patch_scene(scene, bottino_fabric(fab, "kes5"), 3)
+        meshes.insert(0, (setup.body[0], setup.body[1], (0.7, 0.7, 0.75)))
+    else:
+        sag = np.ptp(x[:, 2]) * 1e3
+        lines.append(f"\nFabric {fab}: height of the hanging patch {sag:.1f} mm at n = {n}; by resolution: "
+                     + ", ".join(f"{k}: {np.ptp(runs[(scene, fab, 'kes5', k, 'grid')][1][:, 2]) * 1e3:.1f}"
+                                 for k in sizes if runs[(scene, fab, 'kes5', k, 'grid')] is not None) + "\n")
+    pic = out / f"validation_{scene}_{fab}.png"
+    render_views(pic, meshes, size=(6, 3), title=f"{scene}, fabric {fab}, n = {n}")
+    lines.append(f"\n![{scene} fabric {fab}]({pic.name})\n")
+    return lines
+
+
+def _cusick_section(out, plan: _Plan, failed: list, tally: _Tally) -> list:
+    """The Cusick drape test of every fabric: a table and the shadows' picture."""
+    from .io.plots import shadow_plot
+
+    lines = [f"\n## Cusick drape test\n\n30 cm specimen clamped on an 18 cm disk, settled {plan.cusick_s:g} s; "
+             "DC = (shadow − disk) / (specimen − disk).\n\n| fabric | bending c | DC | nodes | wall s |\n|---|---|---|---|---|\n"]
+    results = []
+    for name in plan.cusick_fabrics:
+        try:
+            r = cusick(preset(name), resolution=0.02 if plan.quick else 0.01, duration=plan.cusick_s)
+        except SimulationUnstable as exc:
+            failed.append(f"Cusick, {name}: {exc}")
+            lines.append(f"| {name} | {preset(name).bending:g} | unstable | | |\n")
+            continue
+        finally:
+            tally(f"cusick {name}")
+        results.append(r)
+        lines.append(f"| {name} | {preset(name).bending:g} | {r.drape_coefficient:.3f} | {r.nodes} | {r.wall_s:.1f} |\n")
+    pic = out / "validation_cusick.png"
+    shadow_plot(pic, results)
+    lines.append(f"\n![drape shadows]({pic.name})\n")
+    return lines

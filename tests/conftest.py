@@ -109,7 +109,7 @@ def assert_minus_gradient(potential, forces, model, state, *, wrt="x", eps=1e-7,
 @pytest.fixture(scope="session")
 def walk_run(tmp_path_factory):
     """A small skirt drape on the walking mannequin, written with its body: (DrapeResult, run folder)."""
-    from tailor.drape import drape
+    from tailor.dress import drape
     from tailor.io import read_pattern
     from tailor.io.body_files import read_body
     from tailor.io.garment import write_drape

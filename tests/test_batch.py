@@ -110,7 +110,7 @@ def test_batch_records_the_broken_job_resumes_and_matches_one_by_one(tmp_path, c
     assert not (out / jobs[1].id).exists()
 
     # identical to running the job alone, here, on this process's threads
-    from tailor.drape import drape
+    from tailor.dress import drape
     from tailor.io import read_pattern
     from tailor.io.body_files import read_body
     from tailor.io.garment import write_drape

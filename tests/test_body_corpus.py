@@ -145,7 +145,7 @@ def dress(body, garment, resolution=0.08):
     stops with the loop error first; graded to the body, it then drapes."""
     from conftest import PANELS
     from tailor.body import Body
-    from tailor.drape import drape
+    from tailor.dress import drape
     from tailor.io import read_pattern
     from tailor.io.body_files import read_body
     from tailor.measure import measure_body
@@ -166,7 +166,7 @@ def assert_dressed(body, garment, result, marks):
     from tailor.corpus import garment_pieces, misplaced
 
     assert garment_pieces(result.weld[result.mesh.faces], int(result.weld.max()) + 1) == 1, body.name
-    assert result.report["max_penetration_m"] <= 0.002, body.name
+    assert result.report.max_penetration_m <= 0.002, body.name
     assert not misplaced(garment, result.frames[-1], marks), f"{body.name}: {misplaced(garment, result.frames[-1], marks)}"
 
 

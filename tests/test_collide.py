@@ -74,11 +74,12 @@ def test_landing_skips_the_vertices_it_is_told_are_held_and_finds_the_same_other
     v = np.tile([0.0, 0.0, -0.5], (len(x), 1))  # a step of 10 ms would bring the middle in
     body = np.asarray(ball.vertices)
     collider = BodyCollider(body[None], ball.faces, margin=0.02)
-    ids, normals, vn = collider.landing(model, x + 0.01 * v, v, 0.01, body, np.zeros_like(body), 0, thickness=0.002)
+    first = collider.landing(model, x + 0.01 * v, v, 0.01, body, np.zeros_like(body), 0, thickness=0.002)
+    ids, normals, vn = first.ids, first.normals, first.normal_velocity
     assert len(ids) > 10
     skip = ids[::2]
-    ids2, normals2, vn2 = collider.landing(model, x + 0.01 * v, v, 0.01, body, np.zeros_like(body), 0, thickness=0.002,
-                                           skip=skip)
+    second = collider.landing(model, x + 0.01 * v, v, 0.01, body, np.zeros_like(body), 0, thickness=0.002, skip=skip)
+    ids2, normals2, vn2 = second.ids, second.normals, second.normal_velocity
     keep = ~np.isin(ids, skip)
     assert np.array_equal(ids2, ids[keep]) and np.allclose(normals2, normals[keep]) and np.allclose(vn2, vn[keep])
 
@@ -101,7 +102,7 @@ def test_clustered_query_finds_exactly_the_pairs_of_one_sphere_per_point():
 
 @pytest.mark.parametrize("scale", [0.5, 1e7])  # 1e7 m: cube indices too far apart for one integer key
 def test_points_are_clustered_by_cube_in_lexicographic_order(scale):
-    from tailor.collide.body import _cluster
+    from tailor.collide.broad import _cluster
 
     points = np.random.default_rng(3).normal(0.0, scale, (4000, 3))
     order, ptr, lo, hi = _cluster(points, 0.06)

@@ -1,7 +1,6 @@
 """Dressing: merging conserves momentum, friction switches at tan θ = μ, a skirt dresses and walks."""
 
 import json
-import sys
 
 import numpy as np
 import pytest
@@ -10,10 +9,9 @@ from conftest import PANELS, sheet
 from tailor.body import Body
 from tailor.cli import main
 from tailor.collide import BodyCollider, self_intersections
-from tailor.drape import DRAPE_RESOLUTION, drape
+from tailor.dress import DRAPE_RESOLUTION, drape
 from tailor.geometry import connected_components
 from tailor.io import read_pattern
-from tailor.placement import no_walls
 from tailor.io.body_files import read_body
 from tailor.io.garment import write_drape
 from tailor.measure import find_landmarks
@@ -64,7 +62,7 @@ def test_cloth_on_an_incline_slides_exactly_when_tan_theta_exceeds_mu(ratio, sli
     integ = make_integrator("symplectic")
     dt = model.time_step
     for _ in range(int(round(0.5 / dt))):
-        state = integ.step(model, state, dt, total_forces)
+        state = integ.step(model, state, dt, total_forces).state
         collider.respond(model, state, dt, body.frames[0], np.zeros_like(body.frames[0]), 0,
                          thickness=thickness, friction=mu)
     down_slope = np.array([0.0, -c, -s])
@@ -93,7 +91,7 @@ def test_skirt_sews_into_one_piece_without_penetration(skirt_static, tmp_path):
     faces = np.array([[int(c.split("/")[0]) - 1 for c in ln.split()[1:]] for ln in lines if ln.startswith("f ")])
     assert np.isfinite(vertices).all()
     assert len(np.unique(connected_components(len(vertices), faces))) == 1  # sewn: one piece
-    assert len(vertices) == result.report["welded_vertices"] < result.report["vertices"]
+    assert len(vertices) == result.report.welded_vertices < result.report.vertices
     report = json.loads((out / "report.json").read_text())
     assert report["max_penetration_m"] <= 0.002
     # the written frames do not pass through themselves, and the report counts it frame by frame
@@ -109,10 +107,10 @@ def test_self_collision_runs_once_the_garment_is_sewn():
     pattern = read_pattern(PANELS / "skirt.json")
     result = drape(pattern, read_body("mannequin"), frames=3, resolution=0.04, self_collision="on")
     report = result.report
-    assert report["active"]["self_collision"] == "on"
-    assert report["self_collision"]["steps"] > 0 and report["self_collision"]["queries"] > 0
-    assert report["cg_iterations"] >= report["steps"] > 0  # the bench's cost measure for garments
-    assert report["max_penetration_m"] <= 0.002
+    assert report.active["self_collision"] == "on"
+    assert report.self_collision["steps"] > 0 and report.self_collision["queries"] > 0
+    assert report.cg_iterations >= report.steps > 0  # the bench's cost measure for garments
+    assert report.max_penetration_m <= 0.002
     weld = result.weld
     x = np.zeros((int(weld.max()) + 1, 3))
     x[weld] = result.frames[-1]
@@ -122,13 +120,13 @@ def test_self_collision_runs_once_the_garment_is_sewn():
 def test_draft_quality_drapes_the_skirt_with_its_larger_step_and_says_so(skirt_static):
     pattern, body, final = skirt_static
     result = drape(pattern, body, frames=3, resolution=0.04, quality="draft")
-    q = result.report["quality"]
-    assert q["name"] == "draft" and q["max_step_s"] > final.report["quality"]["max_step_s"]
-    assert result.report["max_penetration_m"] <= 0.002
+    q = result.report.quality
+    assert q["name"] == "draft" and q["max_step_s"] > final.report.quality["max_step_s"]
+    assert result.report.max_penetration_m <= 0.002
     # the draft skirt hangs where the final one does, within a few centimetres
     assert np.abs(result.frames[-1] - final.frames[-1]).mean() < 0.03
-    assert result.report["active"]["self_collision"] == "auto"  # the default
-    assert result.report["self_collision"]["mode"] == "auto" and result.report["self_collision"]["steps"] > 0
+    assert result.report.active["self_collision"] == "auto"  # the default
+    assert result.report.self_collision["mode"] == "auto" and result.report.self_collision["steps"] > 0
 
 
 def test_draft_sews_a_cotton_tshirt_with_the_tight_solve_then_drapes_with_its_own(mannequin):
@@ -136,8 +134,8 @@ def test_draft_sews_a_cotton_tshirt_with_the_tight_solve_then_drapes_with_its_ow
     # T-shirt's corners stretched 10x during sewing and the run stopped
     result = drape(read_pattern(PANELS / "tshirt.json"), mannequin, "cotton", frames=2, resolution=0.04,
                    quality="draft")
-    assert result.report["quality"]["solver_tolerance"] == 1e-2
-    assert result.report["max_penetration_m"] <= 0.002 and np.isfinite(result.frames[-1]).all()
+    assert result.report.quality["solver_tolerance"] == 1e-2
+    assert result.report.max_penetration_m <= 0.002 and np.isfinite(result.frames[-1]).all()
 
 
 def test_skirt_waistband_sits_at_the_waist(skirt_static):
@@ -152,12 +150,12 @@ def test_skirt_stays_up_on_the_walking_mannequin():
     body = read_body("mannequin-walk")
     result = drape(pattern, body, frames=13, resolution=0.04)  # half a stride
     # dressed standing in the rest pose, then eased into the walk: frame 0 is the walk's first pose
-    assert body.rest is not None and "transition" in result.report["phases"]
+    assert body.rest is not None and "transition" in result.report.phases
     assert np.array_equal(result.body_frames[0], body.frames[0])
     band = np.concatenate([result.mesh.panel_vertices(pattern.panel_index(n)) for n in ("wb_front", "wb_back")])
     drop = result.frames[0][band, 2].mean() - result.frames[-1][band, 2].mean()
     assert abs(drop) < 0.02
-    assert max(result.report["max_penetration_m_per_frame"]) <= 0.002
+    assert max(result.report.max_penetration_m_per_frame) <= 0.002
     # the attached top edge of the waistband follows the moving body: it stays on its surface
     top = np.concatenate([result.mesh.edge_vertices[(pattern.panel_index(n), None, 2)] for n in ("wb_front", "wb_back")])
     collider = BodyCollider(body.frames, body.faces, margin=0.05)
@@ -182,7 +180,7 @@ def test_cli_drape_refuses_bad_input_and_leaves_no_output(tmp_path, capsys):
 def test_stiff_pair_springs_close_a_gap_stably_under_the_implicit_solver():
     from tailor.forces import pair_forces
     from tailor.forces.jacobian import SparsePattern, force_jacobians
-    from tailor.integrators import make_integrator
+    from tailor.integrators import SolverSettings, make_integrator
     from tailor.forces import total_forces
 
     model, x0 = sheet(20, 10, 0.05, "cotton", vertical=False, gravity=(0, 0, 0))
@@ -201,10 +199,10 @@ def test_stiff_pair_springs_close_a_gap_stably_under_the_implicit_solver():
     predicted = -((k_all - k_cloth) @ dx.reshape(-1)).reshape(-1, 3)
     assert np.allclose(pair_forces(stiff, moved) - f, predicted, atol=1e-9)  # linear springs: K is exact
     integ = make_integrator("implicit")
-    integ.max_stretch_change = np.inf  # as drape sews: the seams' pull stretches the seam triangles by design
+    integ.configure(SolverSettings(max_stretch_change=np.inf))  # as drape sews: the seams' pull stretches the seam triangles by design
     gaps = []
     for _ in range(30):
-        state = integ.step(stiff, state, 0.01, total_forces)
+        state = integ.step(stiff, state, 0.01, total_forces).state
         gaps.append(np.linalg.norm(state.x[pairs[:, 0]] - state.x[pairs[:, 1]], axis=1).max())
     assert np.isfinite(state.x).all() and gaps[-1] < 0.01 * 0.2 and gaps[-1] <= gaps[0]
 
@@ -215,10 +213,10 @@ def test_tshirt_sews_and_follows_the_walk():
     weld = result.weld
     faces = weld[result.mesh.faces]
     assert len(np.unique(connected_components(int(weld.max()) + 1, faces))) == 1  # front, back, sleeves: one piece
-    assert max(result.report["max_penetration_m_per_frame"]) <= 0.002
+    assert max(result.report.max_penetration_m_per_frame) <= 0.002
     assert all(np.isfinite(f).all() for f in result.frames)
     # the feet (2 m/s) are far from a T-shirt: its steps are set by the torso and arms near it
-    motion = result.report["phases"]["motion"]
+    motion = result.report.phases["motion"].extra
     assert motion["time_step_near_s"][0] > 1.2 * motion["time_step_s"]
     # it hangs from the shoulders: the neckline stays above the bust
     marks = find_landmarks(result.body_frames[0], result.body_faces)
@@ -241,7 +239,7 @@ def test_garmentcode_patterns_drape_with_their_own_placement(garmentcode_dir, ma
     pattern = read_pattern(garmentcode_dir / f"{name}_specification.json")
     result = drape(pattern, read_body("mannequin"), frames=13, resolution=0.04)
     assert _one_piece(result)
-    assert result.report["max_penetration_m"] <= 0.002
+    assert result.report.max_penetration_m <= 0.002
     marks = find_landmarks(mannequin.vertices, mannequin.faces)
     first, last = result.frames[0][:, 2].max(), result.frames[-1][:, 2].max()
     assert last > first - 0.01  # not sliding down over the half second
@@ -261,10 +259,10 @@ def test_trousers_and_dress_sew_into_one_piece_on_the_mannequin(name, mannequin)
     pattern = read_pattern(PANELS / f"{name}.json")
     result = drape(pattern, mannequin, frames=2, resolution=0.04)
     assert _one_piece(result)
-    assert result.report["max_penetration_m"] <= 0.002
+    assert result.report.max_penetration_m <= 0.002
     assert all(np.isfinite(f).all() for f in result.frames)
     # sewn without crossing itself (the dress keeps one pair from sewing)
-    assert max(result.report["self_intersections_per_frame"]) <= (0 if name == "trousers" else 1)
+    assert max(result.report.self_intersections_per_frame) <= (0 if name == "trousers" else 1)
     marks = find_landmarks(mannequin.vertices, mannequin.faces)
     top = result.frames[-1][:, 2].max()
     if name == "trousers":  # hanging from the waist (placed 5.5 cm above the landmark), legs down to the ankles
@@ -273,22 +271,20 @@ def test_trousers_and_dress_sew_into_one_piece_on_the_mannequin(name, mannequin)
         assert top < marks["neck"].height + 0.05 and result.frames[-1][:, 2].min() > marks["left_knee"].height - 0.15
 
 
-def test_trouser_legs_are_sewn_without_crossing_each_other(mannequin, monkeypatch):
+def test_trouser_legs_are_sewn_without_crossing_each_other(mannequin):
     """The two legs' widened cylinders overlap between the legs; unless each leg is kept on its side
     of the midplane while it is sewn, the crotch extensions are sewn through each other (and the
     self-collision pass then holds them crossed)."""
     pattern = read_pattern(PANELS / "trousers.json")
     sewn = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2)
-    assert sewn.report["self_intersections_per_frame"] == [0]
+    assert sewn.report.self_intersections_per_frame == [0]
     x = sewn.frames[0]
     for name, sign in (("front_left", 1), ("back_right", -1)):
         legs = sewn.mesh.panel_vertices(pattern.panel_index(name))
         low = legs[x[legs, 2] < 0.6]
         assert (sign * x[low, 0] > 0).all()  # below the crotch, each leg on its own side
-    free = lambda pattern, landmarks, body_x=None: no_walls(len(pattern.panels))  # noqa: E731
-    monkeypatch.setattr(sys.modules["tailor.drape"], "limb_walls", free)  # ``tailor.drape`` names the function
-    crossed = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2)
-    assert crossed.report["self_intersections_per_frame"][0] > 10
+    crossed = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2, limb_walls=False)
+    assert crossed.report.self_intersections_per_frame[0] > 10
 
 
 @pytest.mark.slow
@@ -299,11 +295,11 @@ def test_trousers_stay_up_on_the_walking_mannequin():
     band = np.concatenate([result.mesh.panel_vertices(pattern.panel_index(n)) for n in ("wb_front", "wb_back")])
     drop = result.frames[0][band, 2].mean() - result.frames[-1][band, 2].mean()
     assert abs(drop) < 0.02
-    assert max(result.report["max_penetration_m_per_frame"]) <= 0.002
+    assert max(result.report.max_penetration_m_per_frame) <= 0.002
     assert _one_piece(result)
     # walking, the legs' inner sides stay on their sides of the plane between the thighs (the walls
     # follow the body) and never pass through each other
-    assert result.report["self_intersections_per_frame"] == [0] * 51
+    assert result.report.self_intersections_per_frame == [0] * 51
     for x in result.frames[::10]:
         for name, sign in (("front_left", 1), ("back_right", -1)):
             legs = result.mesh.panel_vertices(pattern.panel_index(name))
@@ -311,17 +307,21 @@ def test_trousers_stay_up_on_the_walking_mannequin():
             assert (sign * x[low, 0] > 0).all()
 
 
-def test_library_and_command_line_drape_share_the_default_resolution():
-    import inspect
+def test_library_and_command_line_drape_share_their_defaults():
+    import dataclasses
 
     from tailor.cli import build_parser
+    from tailor.dress import DrapeOptions
 
     args = build_parser().parse_args(["drape", "panels/skirt.json"])
-    assert inspect.signature(drape).parameters["resolution"].default == DRAPE_RESOLUTION == args.resolution * 1e-2
+    assert DrapeOptions().resolution == DRAPE_RESOLUTION == args.resolution * 1e-2
+    for f in dataclasses.fields(DrapeOptions):
+        if f.name in vars(args) and f.name not in ("resolution", "cuts", "wind"):
+            assert getattr(args, f.name) == f.default, f.name
 
 
 def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
-    from tailor.drape import _NearBodySpeed
+    from tailor.dress.timeline import NearBodySpeed as _NearBodySpeed
 
     # two boxes: a still one near the cloth and one 1 m away moving at 2 m/s
     still = np.array([[x, y, z] for x in (0.0, 0.1) for y in (0.0, 0.1) for z in (0.0, 0.1)])
@@ -344,5 +344,5 @@ def test_an_explicit_integrator_follows_the_walking_body():
     result = drape(read_pattern(PANELS / "skirt.json"), read_body("mannequin-walk"), frames=2, resolution=0.12,
                    integrator="symplectic", settle=0.2)
     assert all(np.isfinite(f).all() for f in result.frames)
-    assert max(result.report["max_penetration_m_per_frame"]) <= 0.002
-    assert result.report["steps"] > 1000  # Eq. 24 steps: about a millisecond at 12 cm
+    assert max(result.report.max_penetration_m_per_frame) <= 0.002
+    assert result.report.steps > 1000  # Eq. 24 steps: about a millisecond at 12 cm

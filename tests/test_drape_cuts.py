@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from conftest import PANELS
-from tailor import preset
+
 from tailor.cli import main
-from tailor.drape import drape
+from tailor.dress import drape
 from tailor.io import read_pattern
 from tailor.io.body_files import read_body
 from tailor.io.obj import read_obj
@@ -61,7 +61,7 @@ def test_a_separating_cut_on_a_sewn_skirt_keeps_its_mass_and_unpicks_a_seam():
     result = drape(pattern, body, frames=2, resolution=0.04, settle=0.2, cuts=[cut])
     mesh, weld = result.topology_at(0)
     assert mesh.face_count == base.mesh.face_count and int(weld.max()) > int(base.weld.max())
-    assert result.report["tearing"]["events"][0]["edges"] >= len(seam) // 2 - 1
+    assert result.report.tearing["events"][0]["edges"] >= len(seam) // 2 - 1
     assert boundary_loops(weld[mesh.faces]) == 2  # the slit from the hem opened the hem loop up the seam
     from tailor.model import build_model
     fabrics = {i: p.fabric or pattern.fabric for i, p in enumerate(pattern.panels)}
@@ -75,9 +75,9 @@ def test_the_skirt_tears_only_when_its_fabric_is_weak():
     body = read_body("mannequin")
     cotton = pattern.fabric
     strong = drape(pattern, body, replace(cotton, tear_strain=0.25), frames=3, resolution=0.04, settle=0.2, tear=True)
-    assert strong.report["tearing"]["edges_torn"] == 0 and not strong.topology
+    assert strong.report.tearing["edges_torn"] == 0 and not strong.topology
     weak = drape(pattern, body, replace(cotton, tear_strain=0.005), frames=3, resolution=0.04, settle=0.2, tear=True)
-    assert weak.report["tearing"]["edges_torn"] > 0 and weak.topology
+    assert weak.report.tearing["edges_torn"] > 0 and weak.topology
     assert all(np.isfinite(f).all() for f in weak.frames)
 
 

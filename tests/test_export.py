@@ -28,8 +28,8 @@ def test_run_folder_reads_back_as_the_drape(walk_run):
     result, run = walk_run
     anim = read_run(run)
     assert anim.frame_count == len(result.frames) == 3
-    assert anim.vertex_count == result.report["welded_vertices"]
-    assert anim.fps == result.report["fps"] == 25
+    assert anim.vertex_count == result.report.welded_vertices
+    assert anim.fps == result.report.fps == 25
     assert anim.group_names == tuple(result.mesh.panel_names)
     assert anim.has_body and anim.body_positions.shape[0] == 3
     assert not np.allclose(anim.body_positions[0], anim.body_positions[-1])  # the walk moves

@@ -147,16 +147,15 @@ def test_implicit_step_halves_when_cg_does_not_converge():
 
     def iterations(h):
         solver = ImplicitEuler(max_iterations=100000)
-        solver.step(model, state, h, total_forces)
-        return solver.last_iterations
+        return solver.step(model, state, h, total_forces).iterations
 
     full, half = iterations(dt), iterations(0.5 * dt)
     assert half < full  # a smaller step is better conditioned
     reference = ImplicitEuler(max_iterations=100000)
-    expected = reference.step(model, reference.step(model, state, 0.5 * dt, total_forces), 0.5 * dt, total_forces)
+    expected = reference.step(model, reference.step(model, state, 0.5 * dt, total_forces).state, 0.5 * dt, total_forces).state
     limited = ImplicitEuler(max_iterations=half + 2)
-    got = limited.step(model, state, dt, total_forces)
-    assert limited.halvings == 1 and got.t == pytest.approx(state.t + dt)
+    got = limited.step(model, state, dt, total_forces).state
+    assert limited.counters.halvings == 1 and got.t == pytest.approx(state.t + dt)
     assert np.allclose(got.x, expected.x, atol=1e-9) and np.allclose(got.v, expected.v, atol=1e-6)
 
 
@@ -191,10 +190,10 @@ def test_implicit_step_halves_where_one_linearised_step_would_overstretch():
     assert face_stretch(model, x0).max() == pytest.approx(1.0, abs=1e-9)
 
     unchecked = ImplicitEuler(max_stretch_change=np.inf)
-    assert face_stretch(model, unchecked.step(model, state, 0.04, total_forces).x).max() > 2.0
-    assert unchecked.stretch_halvings == 0
+    assert face_stretch(model, unchecked.step(model, state, 0.04, total_forces).state.x).max() > 2.0
+    assert unchecked.counters.stretch_halvings == 0
 
     checked = ImplicitEuler()
-    got = checked.step(model, state, 0.04, total_forces)
-    assert got.t == pytest.approx(0.04) and checked.stretch_halvings >= 1
-    assert face_stretch(model, got.x).max() < 1.0 + 2 * checked.max_stretch_change  # each half step within the bound
+    got = checked.step(model, state, 0.04, total_forces).state
+    assert got.t == pytest.approx(0.04) and checked.counters.stretch_halvings >= 1
+    assert face_stretch(model, got.x).max() < 1.0 + 2 * checked.settings.max_stretch_change  # each half step within the bound

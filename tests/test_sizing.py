@@ -9,7 +9,7 @@ from conftest import PANELS
 from tailor.body import Body, normalise_body
 from tailor.cli import main
 from tailor.corpus import mannequin_variants
-from tailor.drape import drape
+from tailor.dress import drape
 from tailor.io import read_pattern
 from tailor.io.body_files import read_body
 from tailor.io.obj import write_obj

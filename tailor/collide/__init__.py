@@ -4,10 +4,21 @@ This package is the only place that imports ``fcl``. FCL builds a bounding-volum
 (OBB-RSS) over a triangle mesh and answers proximity and intersection queries between such
 objects. Its PyPI build cannot refit a hierarchy, so a moving mesh is rebuilt; callers query with
 a margin and reuse the candidates while nothing has moved further than it.
+
+* :mod:`.broad` — FCL broad phase over boxes round clusters of points and of triangles;
+* :mod:`.closest`, :mod:`.inside` — closest point on a surface, inside a closed surface (compiled);
+* :mod:`.body` — :class:`BodyCollider`, Carignan Eq. 9–14;
+* :mod:`.cloth`, :mod:`.cloth_kernels` — :class:`SelfCollider`, Eq. 5–8;
+* :mod:`.intersect` — whether a mesh passes through itself;
+* :mod:`.contacts` — :class:`Contacts`, what a response hands to the next implicit step.
 """
 
-from .body import BodyCollider, InsideTest, TriangleBoxes, bvh_object, clustered_query, points_inside, self_intersections, sphere_query
+from .body import BodyCollider
+from .broad import TriangleBoxes, bvh_object, clustered_query, sphere_query
 from .cloth import SELF_COLLISION_MODES, SelfCollider
+from .contacts import NO_CONTACTS, Contacts
+from .inside import InsideTest, points_inside
+from .intersect import self_intersections
 
 __all__ = ["BodyCollider", "SelfCollider", "SELF_COLLISION_MODES", "bvh_object", "points_inside", "InsideTest",
-           "self_intersections", "sphere_query", "clustered_query", "TriangleBoxes"]
+           "self_intersections", "sphere_query", "clustered_query", "TriangleBoxes", "Contacts", "NO_CONTACTS"]

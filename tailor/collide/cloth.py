@@ -37,23 +37,15 @@ conserved exactly. Along the normal the collision is perfectly inelastic: p₀ a
 the normal velocity of their centre of mass (Eq. 6–7), using the triangle point's effective mass
 1/m₁ = Σ wᵢ²/mᵢ, for which Eq. 7 holds exactly at p₁ (Carignan's interpolated m₁ misses it once
 the impulse is spread). Two deliberate departures: the sliding part loses at most μ times the
-normal change (Coulomb, as Eq. 14 for the body) instead of being cancelled too — with full
-cancellation layers glue, and a glued layer pulled by its falling neighbours tore to 5× stretch
-in the two-panel drop; and a predicted contact only has its approach slowed so that it arrives at
+normal change (Coulomb, as Eq. 14 for the body) instead of being cancelled too (with full
+cancellation layers glue, and a glued layer is torn by its falling neighbours); and a predicted contact only has its approach slowed so that it arrives at
 ``thickness`` at the end of the next step. Positions are separated to ``thickness`` with the same
 weights (the centre of mass does not move). Contacts are relaxed Gauss–Seidel style and detection
 repeats until no new contact appears.
 
 Fast motion: when the ends of a candidate pair moved more than one thickness relative to each
 other in the step, the step's motion is replayed in up to :data:`MAX_SUBSTEPS` sub-steps of at most
-one thickness of that relative motion, contacts resolved after each (a strip piling up on a floor falls 4 cm a step on a 2.5 cm mesh; without
-sub-steps it tangled into 21 k intersecting triangle pairs, more than the 1.3 k with no pass at all).
-
-Measured (two 40 cm cotton panels dropped 2 cm apart on a sphere, 0.4 s at Δt 0.01 s; an 80 cm jersey
-strip dropped on end): intersecting triangle pairs in the last frame 20 → **0 in every frame** with
-the edge–edge pairs and the near pairs (the strip: 8–46 a frame without the near pairs); the sphere
-scene runs in 17 s (38 s with vertex–triangle pairs only, before the narrow phase was compiled
-allocation-free and parallel).
+one thickness of that relative motion, contacts resolved after each.
 """
 
 from __future__ import annotations
@@ -63,307 +55,22 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
-from numba import njit, prange
 
 from ..errors import SimulationUnstable
-from .body import TriangleBoxes, boxes, clustered_query, corner_bounds, manager_contacts, run_starts
+from .broad import TriangleBoxes, boxes, clustered_query, corner_bounds, manager_contacts
+from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion,
+                            resolve_contacts, swept_within, unique_ints)
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
 FOLDED_COS = 0.5
 """A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
-NEAR_THICKNESS = 0.25
-"""Fraction of the thickness kept between a vertex and a triangle of its 1-ring (or two edges whose
-ends are neighbours): enough to stop a tight fold passing through itself, little enough not to
-push a sharp seam corner open."""
-PARALLEL_PAIRS = 4096
-"""Candidate pairs from which the narrow phase runs on every thread (below, waking them costs more)."""
 SELF_CELL = 0.1
 """Side [m] of the cubes the self-collision broad phase bins the cloth into: fewer cluster pairs (one
-Python object each) than the body's 6 cm; on the 4 cm skirt settling, queries 1.34 → 0.82 s (15 cm: 0.77 s)."""
+Python object each) than the body's 6 cm (docs/measurements.md)."""
 MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
-
-
-def _unique_ints(a):
-    """Sorted distinct values of a 1-D integer array, by one sort: NumPy 2.4's ``np.unique`` hashes
-    here and took 1.85 s for 2.3 M edge-pair keys (sorting: 0.04 s), a third of a fast-falling
-    drape's self-collision time."""
-    a = np.sort(a)
-    return a[run_starts(a)] if len(a) else a
-
-
-@njit(cache=True)
-def _classify(gap, closing, travelled, thickness, reach):
-    """Whether a pair at signed ``gap`` (positive on the side it was on) is a contact.
-
-    In contact: nearer than ``thickness``. Predicted: ``closing`` [m] (approach over the next step,
-    1.5× the current velocity) would bring it nearer. Crossed: behind by no more than it
-    ``travelled`` relative to the other side since the previous step (a real passage, not a plane
-    sweeping past a distant point), and within ``reach``.
-    """
-    if gap >= reach or gap < -reach:
-        return False
-    if gap >= thickness:
-        return gap - closing < thickness
-    if gap < 0.0:
-        return -gap <= travelled + thickness
-    return True
-
-
-@njit(cache=True, inline="always")
-def _d(x, i, j):
-    """x[i] − x[j] as a tuple (no array allocated in the compiled loops)."""
-    return x[i, 0] - x[j, 0], x[i, 1] - x[j, 1], x[i, 2] - x[j, 2]
-
-
-@njit(cache=True, inline="always")
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(cache=True, inline="always")
-def _cross(a, b):
-    return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
-
-
-@njit(cache=True, inline="always")
-def _store(k, out_i, out_a, out_n, out_h, i0, i1, i2, i3, a0, a1, a2, a3, n, h):
-    out_i[k, 0], out_i[k, 1], out_i[k, 2], out_i[k, 3] = i0, i1, i2, i3
-    out_a[k, 0], out_a[k, 1], out_a[k, 2], out_a[k, 3] = a0, a1, a2, a3
-    out_n[k, 0], out_n[k, 1], out_n[k, 2] = n[0], n[1], n[2]
-    out_h[k] = h
-
-
-@njit(cache=True, inline="always")
-def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
-    """Whether candidate k (vertex ``vtx[k]``, triangle ``tri[k]``) is a contact; if so it fills
-    slot k of the outputs and sets ``hit[k]``. Each contact is a stencil of four vertices
-    with signed weights α summing to zero, the gap being (Σαᵢxᵢ)·n with ``n`` pointing to the side
-    the vertex was on before this step (side memory): vertex p over triangle abc at barycentrics
-    (u, v, w) has α = (1, −u, −v, −w). Contacts are in contact, predicted or crossed
-    (:func:`_classify`) over ``dt``. Pairs flagged ``near`` (the triangle touches the vertex's
-    1-ring) keep only :data:`NEAR_THICKNESS` of the thickness: at a sharp bend or a seam corner they
-    are close without touching, but a tight fold can still pass through. Each contact's kept
-    distance goes to ``out_h``.
-    """
-    hit[k] = False
-    p, t = vtx[k], tri[k]
-    a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
-    e1, e2 = _d(x, b, a), _d(x, c, a)
-    n = _cross(e1, e2)
-    nn = math.sqrt(_dot(n, n))
-    if nn <= 1e-300:
-        return
-    n = (n[0] / nn, n[1] / nn, n[2] / nn)
-    d = _d(x, p, a)
-    s_prev = _dot(_d(xp, p, a), _cross(_d(xp, b, a), _d(xp, c, a)))
-    s_now = _dot(d, n)
-    side = (1.0 if s_prev > 0.0 else -1.0) if s_prev != 0.0 else (1.0 if s_now >= 0.0 else -1.0)
-    d11, d12, d22 = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
-    den = d11 * d22 - d12 * d12
-    if den <= 0.0:
-        return
-    r1, r2 = _dot(d, e1), _dot(d, e2)
-    v = (d22 * r1 - d12 * r2) / den
-    w = (d11 * r2 - d12 * r1) / den
-    u = 1.0 - v - w
-    if u < 0.0 or v < 0.0 or w < 0.0:
-        return
-    rv_n = 0.0
-    moved2 = 0.0
-    for q in range(3):
-        rv_n += (vel[p, q] - (u * vel[a, q] + v * vel[b, q] + w * vel[c, q])) * n[q]
-        m = (x[p, q] - xp[p, q]) - (u * (x[a, q] - xp[a, q]) + v * (x[b, q] - xp[b, q]) + w * (x[c, q] - xp[c, q]))
-        moved2 += m * m
-    h = NEAR_THICKNESS * thickness if near[k] else thickness
-    if _classify(side * s_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
-        _store(k, out_i, out_a, out_n, out_h, p, a, b, c, 1.0, -u, -v, -w,
-               (side * n[0], side * n[1], side * n[2]), h)
-        hit[k] = True
-
-
-@njit(cache=True, parallel=True)
-def _detect(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
-    """Every vertex–triangle candidate through :func:`_vt_pair`, in parallel (one slot each: the result
-    does not depend on the thread count)."""
-    for k in prange(len(tri)):
-        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit)
-
-
-@njit(cache=True)
-def _detect_serial(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
-    """:func:`_detect` on one thread: a few hundred candidates are not worth waking the others."""
-    for k in range(len(tri)):
-        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit)
-
-
-@njit(cache=True, inline="always")
-def _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
-    """Whether candidate edge pair k of ``pairs`` (E, 4) = (a0, a1, b0, b1) is a contact; it uses slot
-    ``offset + k`` of the outputs and of ``hit``.
-
-    Two edges can pass through each other with no vertex ever near a triangle (sheets sliding
-    across each other, a boundary edge cutting through a layer). Their closest points
-    pa = (1 − s)·a0 + s·a1 and pb = (1 − t)·b0 + t·b1 give the stencil α = (1 − s, s, −(1 − t), −t)
-    and the normal n = (a1 − a0) × (b1 − b0) / |…|, oriented by side memory like the vertex–triangle
-    case: the sign of (pa − pb)·n before this step (it flips only when the edges pass through each
-    other). Pairs whose closest points fall on an end (a vertex: the vertex–triangle test covers
-    it) or that are nearly parallel (the normal is undefined) are left out; ``near`` pairs (ends
-    in each other's 1-ring) keep a smaller distance, as in :func:`_detect`.
-    """
-    slot = offset + k
-    hit[slot] = False
-    a0, a1, b0, b1 = pairs[k, 0], pairs[k, 1], pairs[k, 2], pairs[k, 3]
-    da, db, r = _d(x, a1, a0), _d(x, b1, b0), _d(x, a0, b0)
-    aa, bb, ab = _dot(da, da), _dot(db, db), _dot(da, db)
-    den = aa * bb - ab * ab
-    if den <= 1e-6 * aa * bb:  # within 0.06° of parallel
-        return
-    ar, br = _dot(da, r), _dot(db, r)
-    s = (ab * br - bb * ar) / den
-    t = (aa * br - ab * ar) / den
-    if s <= 0.0 or s >= 1.0 or t <= 0.0 or t >= 1.0:
-        return
-    n = _cross(da, db)
-    nn = math.sqrt(_dot(n, n))
-    n = (n[0] / nn, n[1] / nn, n[2] / nn)
-    g_now = 0.0
-    g_prev = 0.0
-    rv_n = 0.0
-    moved2 = 0.0
-    n_prev = _cross(_d(xp, a1, a0), _d(xp, b1, b0))
-    for q in range(3):
-        g_now += (r[q] + s * da[q] - t * db[q]) * n[q]
-        g_prev += ((1.0 - s) * xp[a0, q] + s * xp[a1, q] - (1.0 - t) * xp[b0, q] - t * xp[b1, q]) * n_prev[q]
-        rv_n += ((1.0 - s) * vel[a0, q] + s * vel[a1, q] - (1.0 - t) * vel[b0, q] - t * vel[b1, q]) * n[q]
-        m = ((1.0 - s) * (x[a0, q] - xp[a0, q]) + s * (x[a1, q] - xp[a1, q])
-             - (1.0 - t) * (x[b0, q] - xp[b0, q]) - t * (x[b1, q] - xp[b1, q]))
-        moved2 += m * m
-    if _dot(n_prev, n) < 0.0:
-        g_prev = -g_prev  # the edges turned over each other: keep the sign in today's normal
-    side = (1.0 if g_prev > 0.0 else -1.0) if g_prev != 0.0 else (1.0 if g_now >= 0.0 else -1.0)
-    h = NEAR_THICKNESS * thickness if near[k] else thickness
-    if _classify(side * g_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
-        _store(slot, out_i, out_a, out_n, out_h, a0, a1, b0, b1, 1.0 - s, s, t - 1.0, -t,
-               (side * n[0], side * n[1], side * n[2]), h)
-        hit[slot] = True
-
-
-@njit(cache=True, parallel=True)
-def _detect_edges(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
-    """Every edge–edge candidate through :func:`_ee_pair`, in parallel (one slot each)."""
-    for k in prange(len(pairs)):
-        _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
-
-
-@njit(cache=True)
-def _detect_edges_serial(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
-    """:func:`_detect_edges` on one thread."""
-    for k in range(len(pairs)):
-        _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
-
-
-@njit(cache=True)
-def _sweptwithin(lo, hi, edges, a, b, limit):
-    """Whether the boxes of edges ``a[k]`` and ``b[k]`` (round their ends' boxes ``lo``/``hi``) come
-    within ``limit`` of each other."""
-    out = np.zeros(len(a), np.bool_)
-    for k in range(len(a)):
-        d2 = 0.0
-        for q in range(3):
-            a_lo = min(lo[edges[a[k], 0], q], lo[edges[a[k], 1], q])
-            a_hi = max(hi[edges[a[k], 0], q], hi[edges[a[k], 1], q])
-            b_lo = min(lo[edges[b[k], 0], q], lo[edges[b[k], 1], q])
-            b_hi = max(hi[edges[b[k], 0], q], hi[edges[b[k], 1], q])
-            g = max(b_lo - a_hi, 0.0, a_lo - b_hi)
-            d2 += g * g
-        out[k] = d2 <= limit * limit
-    return out
-
-
-@njit(cache=True)
-def _pair_motion(motion, vtx, tri, faces, ee):
-    """Largest relative motion [m] within any candidate pair: of a vertex against its triangle's
-    corners, of an edge's ends against the other's (bounds the motion of the pair's closest points)."""
-    worst = 0.0
-    for k in range(len(vtx)):
-        p = vtx[k]
-        for c in range(3):
-            q = faces[tri[k], c]
-            d = 0.0
-            for e in range(3):
-                g = motion[p, e] - motion[q, e]
-                d += g * g
-            worst = max(worst, d)
-    for k in range(len(ee)):
-        for i in range(2):
-            for j in range(2, 4):
-                d = 0.0
-                for e in range(3):
-                    g = motion[ee[k, i], e] - motion[ee[k, j], e]
-                    d += g * g
-                worst = max(worst, d)
-    return math.sqrt(worst)
-
-
-@njit(cache=True)
-def _resolve(x, vel, inv_mass, ci, ca, cn, ch, dt, friction, sweeps):
-    """Gauss–Seidel over the contacts: separate to ``thickness``, then Eq. 5–8 on approaching pairs.
-
-    With stencil weights α (Σα = 0) every correction moves vertex i by αᵢ·imᵢ·j for one vector j,
-    so Σmᵢ·Δvᵢ = j·Σαᵢ = 0: linear momentum is conserved exactly. Returns the largest remaining
-    overlap [m].
-    """
-    worst = 0.0
-    for _ in range(sweeps):
-        worst = 0.0
-        least = 1e300
-        for k in range(len(ci)):
-            n = cn[k]
-            thickness = ch[k]
-            least = min(least, thickness)
-            big_w = 0.0
-            r_max = 0.0
-            gap = 0.0
-            for m in range(4):
-                i = ci[k, m]
-                big_w += ca[k, m] * ca[k, m] * inv_mass[i]
-                gap += ca[k, m] * (x[i] @ n)
-            if big_w <= 0.0:
-                continue
-            # a side held mostly by pinned vertices would fling its free one (Δv = rel/α):
-            # no vertex changes by more than the whole relative motion
-            for m in range(4):
-                r_max = max(r_max, abs(ca[k, m]) * inv_mass[ci[k, m]] / big_w)
-            big_w *= max(1.0, r_max)
-            if gap < thickness:
-                worst = max(worst, thickness - gap)
-                lam = (thickness - gap) / big_w
-                for m in range(4):
-                    i = ci[k, m]
-                    x[i] += lam * ca[k, m] * inv_mass[i] * n
-            rel = np.zeros(3)
-            for m in range(4):
-                rel += ca[k, m] * vel[ci[k, m]]
-            vn = rel @ n
-            j = np.zeros(3)
-            if gap < thickness * 1.01:
-                if vn < 0.0:  # in contact and approaching: the normal velocities meet (Eq. 7 along n) ...
-                    tang = rel - vn * n
-                    st = math.sqrt(tang @ tang)
-                    # ... and sliding loses at most μ times that (Coulomb, as Eq. 14 for the body)
-                    keep = max(0.0, 1.0 - friction * (-vn) / st) if st > 0.0 else 0.0
-                    j = -(vn * n + (1.0 - keep) * tang) / big_w
-            elif vn * dt < thickness - gap:  # would close the gap this step: arrive, do not cross
-                j = ((thickness - gap) / dt - vn) / big_w * n
-            for m in range(4):
-                i = ci[k, m]
-                vel[i] += ca[k, m] * inv_mass[i] * j
-        if worst < 1e-3 * least:
-            break
-    return worst
 
 
 class SelfCollider:
@@ -388,7 +95,7 @@ class SelfCollider:
     friction : float
         Cloth-on-cloth Coulomb coefficient for the sliding part (``inf``: Carignan's full Eq. 7).
     edges : bool
-        Also check edge–edge pairs (:func:`_detect_edges`); off, only vertex–triangle pairs.
+        Also check edge–edge pairs (:func:`detect_ee`); off, only vertex–triangle pairs.
     cell : float
         Side [m] of the cubes the broad phase clusters vertices and triangles into
         (:data:`SELF_CELL`).
@@ -524,7 +231,7 @@ class SelfCollider:
         self._tri_near = np.zeros(0, bool)
         self._ee_near = np.zeros(0, bool)
         if len(faces):
-            verts = _unique_ints(self.faces[faces].ravel())
+            verts = unique_ints(self.faces[faces].ravel())
             target = TriangleBoxes(x, self.faces[faces], self.cell, vertex_boxes=swept)
             point, local = clustered_query(x[verts], radius, target, cell=self.cell,
                                            point_boxes=None if swept is None else (swept[0][verts], swept[1][verts]))
@@ -559,14 +266,14 @@ class SelfCollider:
         ea = np.repeat(self._ve_idx[self._ve_ptr[vertex][rep] + offset], 3)
         eb = self._face_edges[tri[rep]].ravel()
         ne = len(self._edges)
-        key = _unique_ints(np.minimum(ea, eb) * ne + np.maximum(ea, eb))
+        key = unique_ints(np.minimum(ea, eb) * ne + np.maximum(ea, eb))
         ka, kb = key // ne, key % ne
         ends_a, ends_b = self._edges[ka], self._edges[kb]
         shared = (ends_a[:, :, None] == ends_b[:, None, :]).any(axis=(1, 2))
         # only edges that come within the query radius: the candidates' other edge pairs are far apart
         keep = np.flatnonzero(~shared)
         lo, hi = vertex_boxes
-        close = _sweptwithin(lo, hi, self._edges, ka[keep], kb[keep], radius)
+        close = swept_within(lo, hi, self._edges, ka[keep], kb[keep], radius)
         ea, eb = ends_a[keep[close]], ends_b[keep[close]]
         near = self._is_ring(ea[:, :, None], eb[:, None, :]).any(axis=(1, 2))
         return np.ascontiguousarray(np.column_stack([ea, eb]), dtype=np.int64), near
@@ -608,7 +315,7 @@ class SelfCollider:
             # fast relative motion: replay the step's motion in sub-steps of at most one thickness
             # of any candidate pair's relative motion, resolving contacts after each, so no pair
             # jumps through another between two checks
-            rel = _pair_motion(x - xp, self._vtx, self._tri, self.faces, self._ee)
+            rel = pair_motion(x - xp, self._vtx, self._tri, self.faces, self._ee)
             sub = int(min(MAX_SUBSTEPS, max(1, math.ceil(rel / self.thickness))))
             self.stats["max_substeps"] = max(self.stats["max_substeps"], sub)
             im = np.ascontiguousarray(inv_mass, dtype=np.float64)
@@ -637,7 +344,7 @@ class SelfCollider:
         lists = []
         seen = np.zeros(0, np.int64)
         for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
-            vt, ee = (_detect, _detect_edges) if m >= PARALLEL_PAIRS else (_detect_serial, _detect_edges_serial)
+            vt, ee = (detect_vt, detect_ee) if m >= PARALLEL_PAIRS else (detect_vt_serial, detect_ee_serial)
             vt(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self.thickness,
                self.thickness + self._reach, ci, ca, cn, ch, hit)
             if self.edges:
@@ -654,7 +361,7 @@ class SelfCollider:
             new = found[new]
             lists.append((ci[new], ca[new], cn[new], ch[new]))
             all_i, all_a, all_n, all_h = (np.concatenate(c) for c in zip(*lists))
-            _resolve(x, v, im, all_i, all_a, all_n, all_h, dt, self.friction, sweeps)
+            resolve_contacts(x, v, im, all_i, all_a, all_n, all_h, dt, self.friction, sweeps)
         return np.union1d(keys, seen)
 
     def carry_stats(self, stats: dict) -> None:

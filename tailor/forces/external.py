@@ -42,7 +42,7 @@ def air_damping(model, state, wind=None) -> np.ndarray:
     block = (c[:, None, None] * normal[:, :, None] * normal[:, None, :]).reshape(-1, 9)
     corners = model.faces.reshape(-1)
     flat = out.reshape(-1, 9)
-    for j in range(9):  # bincount per entry: 2x faster than np.add.at on (F, 3, 3) (2.6 vs 5.1 ms, 8k faces)
+    for j in range(9):  # bincount per entry: quicker than np.add.at on (F, 3, 3)
         flat[:, j] = np.bincount(corners, np.repeat(block[:, j], 3), minlength=len(flat))
     return out
 

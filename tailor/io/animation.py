@@ -2,7 +2,7 @@
 
 :class:`Animation` holds the welded garment (a seam is one vertex) over all frames, its faces,
 per-panel UVs and groups, the frame rate and optionally the body. It comes either straight from
-a :class:`tailor.drape.DrapeResult` (:func:`animation_from_drape`) or from a run folder written
+a :class:`tailor.dress.DrapeResult` (:func:`animation_from_drape`) or from a run folder written
 by ``tailor drape`` (:func:`read_run`), so ``tailor export`` works on old runs too.
 """
 
@@ -107,7 +107,7 @@ def welded(weld, faces, x):
 
 
 def animation_from_drape(result, *, with_body: bool = True) -> Animation:
-    """The :class:`Animation` of a :class:`tailor.drape.DrapeResult` (welded, as the OBJ files are)."""
+    """The :class:`Animation` of a :class:`tailor.dress.DrapeResult` (welded, as the OBJ files are)."""
     if getattr(result, "topology", None):
         first = result.topology[0][0]
         raise TailorError(f"the garment's mesh changes at frame {first} (a cut or a tear): only the OBJ sequence "
@@ -118,7 +118,7 @@ def animation_from_drape(result, *, with_body: bool = True) -> Animation:
     body = np.stack(result.body_frames) if with_body and result.body_frames else None
     return Animation(name=result.pattern.name, positions=positions, faces=faces, uv=np.asarray(mesh.uv),
                      face_uv=np.asarray(mesh.faces), face_group=np.asarray(mesh.face_panel),
-                     group_names=tuple(mesh.panel_names), fps=float(result.report.get("fps", DEFAULT_FPS)),
+                     group_names=tuple(mesh.panel_names), fps=float(result.report.fps),
                      body_positions=body, body_faces=np.asarray(result.body_faces) if body is not None else None)
 
 

@@ -68,8 +68,6 @@ def draw_pattern(pattern, path, *, mesh_resolution: float | None = None, dpi: in
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection
-    from matplotlib.patches import FancyArrowPatch, Polygon as PolygonPatch
 
     from ..errors import TailorError
 
@@ -77,9 +75,8 @@ def draw_pattern(pattern, path, *, mesh_resolution: float | None = None, dpi: in
     if fmt not in ("png", "svg"):
         raise TailorError(f"{path}: a drawing is .png or .svg")
     offsets = panel_layout(pattern)
-    cm = 100.0
     allpts = np.concatenate([loop_polyline([e.curve for e in p.edges]) + o for p, o in zip(pattern.panels, offsets)])
-    span = (allpts.max(axis=0) - allpts.min(axis=0)) * cm
+    span = (allpts.max(axis=0) - allpts.min(axis=0)) * CM
     scale = 8.0 / max(span.max(), 1e-9)
     fig, ax = plt.subplots(figsize=(max(span[0] * scale, 3) + 1.5, max(span[1] * scale, 3) + 1.0))
     size = max(span.max(), 10.0)  # cm: notch, arrow and text sizes follow the drawing
@@ -89,38 +86,66 @@ def draw_pattern(pattern, path, *, mesh_resolution: float | None = None, dpi: in
 
         mesh = discretise(pattern, mesh_resolution)
     for i, (panel, off) in enumerate(zip(pattern.panels, offsets)):
-        colour = panel_colour(i)
-        outline = (loop_polyline([e.curve for e in panel.edges]) + off) * cm
-        ax.add_patch(PolygonPatch(outline, closed=True, facecolor=(*colour, 0.18), edgecolor="black", linewidth=0.8))
-        for hole in panel.holes:
-            ax.add_patch(PolygonPatch((loop_polyline([e.curve for e in hole]) + off) * cm, closed=True,
-                                      facecolor="white", edgecolor="black", linewidth=0.8))
-        if mesh is not None:
-            faces = mesh.faces[mesh.face_panel == i]
-            tri = (mesh.uv[faces] + off) * cm
-            ax.add_collection(LineCollection(np.concatenate([tri, tri[:, :1]], axis=1), colors=[(*colour, 0.6)],
-                                             linewidths=0.3))
-        # edge numbers, just inside the outline
-        for k, edge in enumerate(panel.edges):
-            mid = sample_curve(edge.curve, [0.45, 0.5, 0.55])
-            inward = _inward(panel, mid)[1]
-            ax.text(*((mid[1] + off) * cm + inward * size * 0.025), str(k), fontsize=6, color="0.45",
-                    ha="center", va="center")
-        # name and grain arrow at the centre
-        centre = (outline.min(axis=0) + outline.max(axis=0)) / 2
-        ext = outline.max(axis=0) - outline.min(axis=0)
-        g = np.array([np.cos(panel.grain), np.sin(panel.grain)]) * min(ext) * 0.3
-        ax.add_patch(FancyArrowPatch(centre - g, centre + g, arrowstyle="<|-|>", mutation_scale=8, color="0.25",
-                                     linewidth=0.8))
-        ax.text(centre[0], centre[1] - min(ext) * 0.05, panel.name, fontsize=8, ha="center", va="top",
-                rotation=0, bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 1})
-    cmap = plt.get_cmap("tab20")
+        _draw_panel(ax, i, panel, off, mesh, size)
+    _draw_seams(ax, pattern, offsets, size, plt.get_cmap("tab20"))
+    _draw_attachments(ax, pattern, offsets)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(0.04)
+    ax.set_xlabel("cm")
+    ax.set_title(f"{pattern.name}: {len(pattern.panels)} panels, {len(pattern.seams)} seams"
+                 + (f", mesh {mesh_resolution * CM:g} cm" if mesh_resolution else ""), fontsize=9)
+    ax.tick_params(labelsize=7)
+    with atomic_write(path, "wb") as fh:
+        fig.savefig(fh, format=fmt, dpi=dpi, bbox_inches="tight")
+    plt.close(fig)
+    log.debug("drew %s -> %s", pattern.name, path)
+
+
+CM = 100.0
+"""Drawings are in cm."""
+
+
+def _draw_panel(ax, i, panel, off, mesh, size) -> None:
+    """One panel: outline, holes, its mesh, edge numbers, name and grain arrow."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import FancyArrowPatch, Polygon as PolygonPatch
+
+    colour = panel_colour(i)
+    outline = (loop_polyline([e.curve for e in panel.edges]) + off) * CM
+    ax.add_patch(PolygonPatch(outline, closed=True, facecolor=(*colour, 0.18), edgecolor="black", linewidth=0.8))
+    for hole in panel.holes:
+        ax.add_patch(PolygonPatch((loop_polyline([e.curve for e in hole]) + off) * CM, closed=True,
+                                  facecolor="white", edgecolor="black", linewidth=0.8))
+    if mesh is not None:
+        faces = mesh.faces[mesh.face_panel == i]
+        tri = (mesh.uv[faces] + off) * CM
+        ax.add_collection(LineCollection(np.concatenate([tri, tri[:, :1]], axis=1), colors=[(*colour, 0.6)],
+                                         linewidths=0.3))
+    for k, edge in enumerate(panel.edges):  # edge numbers, just inside the outline
+        mid = sample_curve(edge.curve, [0.45, 0.5, 0.55])
+        inward = _inward(panel, mid)[1]
+        ax.text(*((mid[1] + off) * CM + inward * size * 0.025), str(k), fontsize=6, color="0.45",
+                ha="center", va="center")
+    centre = (outline.min(axis=0) + outline.max(axis=0)) / 2
+    ext = outline.max(axis=0) - outline.min(axis=0)
+    g = np.array([np.cos(panel.grain), np.sin(panel.grain)]) * min(ext) * 0.3
+    ax.add_patch(FancyArrowPatch(centre - g, centre + g, arrowstyle="<|-|>", mutation_scale=8, color="0.25",
+                                 linewidth=0.8))
+    ax.text(centre[0], centre[1] - min(ext) * 0.05, panel.name, fontsize=8, ha="center", va="top",
+            rotation=0, bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 1})
+
+
+def _draw_seams(ax, pattern, offsets, size, cmap) -> None:
+    """Every seam's two sides in one colour, with notches at both ends, a direction arrow and its number."""
+    from matplotlib.patches import FancyArrowPatch
+
     for j, seam in enumerate(pattern.seams):
         colour = cmap(j % 20)
         for side in (seam.a, seam.b):
             pi = pattern.panel_index(side.panel)
             panel, off = pattern.panels[pi], offsets[pi]
-            pts = (_side_points(pattern, side) + off) * cm
+            pts = (_side_points(pattern, side) + off) * CM
             ax.plot(pts[:, 0], pts[:, 1], color=colour, linewidth=2.5, solid_capstyle="butt")
             inward = _inward(panel, pts) * (-1 if side.reversed else 1)
             length = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
@@ -133,23 +158,16 @@ def draw_pattern(pattern, path, *, mesh_resolution: float | None = None, dpi: in
                                          linewidth=1.0, shrinkA=0, shrinkB=0))
             mid = pts[len(pts) // 2] + inward[len(pts) // 2] * size * 0.045
             ax.text(mid[0], mid[1], str(j), fontsize=7, color=colour, ha="center", va="center", fontweight="bold")
+
+
+def _draw_attachments(ax, pattern, offsets) -> None:
+    """Attachments: dashed edges, dotted corners."""
     for att in pattern.attachments:
         pi = pattern.panel_index(att.panel)
         off = offsets[pi]
         if att.edge is not None:
-            pts = (_side_points(pattern, att) + off) * cm
+            pts = (_side_points(pattern, att) + off) * CM
             ax.plot(pts[:, 0], pts[:, 1], color="black", linewidth=1.5, linestyle=(0, (3, 2)))
         else:
-            v = (np.asarray(pattern.panels[pi].vertices[att.vertex]) + off) * cm
+            v = (np.asarray(pattern.panels[pi].vertices[att.vertex]) + off) * CM
             ax.plot(*v, marker="o", color="black", markersize=4)
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    ax.margins(0.04)
-    ax.set_xlabel("cm")
-    ax.set_title(f"{pattern.name}: {len(pattern.panels)} panels, {len(pattern.seams)} seams"
-                 + (f", mesh {mesh_resolution * cm:g} cm" if mesh_resolution else ""), fontsize=9)
-    ax.tick_params(labelsize=7)
-    with atomic_write(path, "wb") as fh:
-        fig.savefig(fh, format=fmt, dpi=dpi, bbox_inches="tight")
-    plt.close(fig)
-    log.debug("drew %s -> %s", pattern.name, path)

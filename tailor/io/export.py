@@ -9,7 +9,7 @@ format     files                                         opens in
 ``usd``    ``<name>.usdc`` (``usda``: text)               Blender, Houdini, Maya, usdview, Omniverse
 =========  ===========================================  ============================================
 
-:func:`export` takes a :class:`~tailor.drape.DrapeResult`, an
+:func:`export` takes a :class:`~tailor.dress.DrapeResult`, an
 :class:`~tailor.io.animation.Animation` or a run folder written by ``tailor drape``.
 """
 

@@ -18,7 +18,7 @@ from .obj import obj_text
 __all__ = ["write_drape"]
 
 def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = False) -> Path:
-    """Write ``result`` (:class:`tailor.drape.DrapeResult`) into ``out_dir``.
+    """Write ``result`` (:class:`tailor.dress.DrapeResult`) into ``out_dir``.
 
     Files: ``garment_0000.obj`` … (``v`` welded so a seam is one vertex, ``vt`` the flat pattern in
     metres, one ``g`` per panel), ``garment.mtl``, optionally ``body_0000.obj`` …, and
@@ -42,7 +42,7 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
             (tmp / f"garment_{k:04d}.obj").write_text(text)
             if with_body:
                 (tmp / f"body_{k:04d}.obj").write_text(obj_text(result.body_frames[k], result.body_faces))
-        report = dict(result.report)
+        report = result.report.to_json()
         report["pattern"] = result.pattern.source
         report["name"] = result.pattern.name
         report["frames_written"] = len(result.frames)

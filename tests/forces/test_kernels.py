@@ -85,7 +85,7 @@ def test_stiffness_is_symmetric_positive_semidefinite_and_predicts_force_change(
 
 
 def test_block_jacobi_inverse_matches_lapack_on_stiff_and_ill_conditioned_blocks():
-    from tailor.forces.kernels import inverse_3x3
+    from tailor.integrators.cg import inverse_3x3
 
     rng = np.random.default_rng(7)
     a = rng.standard_normal((500, 3, 3))

@@ -1,0 +1,159 @@
+"""The main job: ``tailor drape``."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from ..errors import TailorError
+from .common import UP_CHOICES, _formats, _preview, preview_options
+from .pattern import _graded
+
+
+def _options(args):
+    """The drape's options from the command line, checked before any file is read."""
+    from ..dress import DrapeOptions
+
+    cuts = ()
+    if args.cuts:
+        from ..io.cuts import read_cuts
+
+        cuts = tuple(read_cuts(args.cuts))
+    return DrapeOptions(frames=args.frames, fps=args.fps, resolution=args.resolution * 1e-2, integrator=args.integrator,
+                        sew_timeout=args.sew_timeout, record_sewing=args.record_sewing,
+                        self_collision=args.self_collision, quality=args.quality,
+                        wind=_wind(args.wind, args.turbulence), cuts=cuts, tear=args.tear, fabric=args.fabric)
+
+
+def _cmd_drape(args) -> int:
+    from ..dress import drape
+    from ..io import read_pattern
+    from ..io.body_files import read_body
+    from ..io.garment import write_drape
+
+    formats = _formats(args.format)  # checked before a long run, not after
+    options = _options(args)
+    if (args.cuts or args.tear) and (args.preview or any(f != "obj" for f in formats)):
+        raise TailorError("--cuts/--tear change the garment's mesh during the run: only the OBJ sequence can hold "
+                          "that (leave out --format and --preview)")
+    pattern = read_pattern(args.pattern)
+    out = Path(args.out) if args.out else Path("out") / pattern.name
+    if out.exists() and not args.overwrite:
+        raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
+    body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base, fps=args.body_fps)
+    if args.grade == "auto":
+        pattern, _ = _graded(pattern, body, args.design_body)
+    bars = PhaseBars(disable=args.quiet)
+    t0 = time.perf_counter()
+    try:
+        result = drape(pattern, body, options=options, progress=bars)
+    finally:
+        bars.close()
+    write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
+    if any(f != "obj" for f in formats) or args.preview:
+        from ..io.animation import animation_from_drape
+        from ..io.export import export
+
+        anim = animation_from_drape(result, with_body=args.with_body)
+        for fmt in formats:
+            if fmt != "obj":
+                export(anim, fmt, out, with_body=args.with_body)
+        if args.preview:
+            _preview(anim, out / "preview", args)
+    r = result.report
+    print(f"{pattern.source} on {args.body}: {r.vertices} vertices ({r.welded_vertices} after sewing), "
+          f"{len(result.frames)} frames, max penetration {r.max_penetration_m * 1000:.1f} mm, "
+          f"seam gap at merge {r.phases['sewing'].extra['max_gap_at_merge_m'] * 1000:.1f} mm, "
+          f"self-intersections {max(r.self_intersections_per_frame, default=0)}, "
+          + (f"{len(options.cuts)} cuts and {r.tearing['edges_torn']} edges torn, " if r.tearing is not None else "")
+          + f"{time.perf_counter() - t0:.1f} s -> {out}/")
+    return 0
+
+
+class PhaseBars:
+    """Progress of a drape on stderr: one tqdm bar per phase, with simulated time, steps/s and ETA."""
+
+    def __init__(self, disable: bool = False):
+        self.disable, self.bar, self.phase = disable, None, None
+        self.steps0, self.wall0 = 0, time.perf_counter()
+
+    def __call__(self, event) -> None:
+        from tqdm import tqdm
+
+        if event.phase != self.phase:
+            self.close()
+            self.phase, self.steps0, self.wall0 = event.phase, event.steps, time.perf_counter()
+            self.bar = tqdm(total=event.total, desc=f"{event.phase:<10}", unit="pair" if event.phase == "sewing" else "frame",
+                            file=sys.stderr, disable=self.disable, dynamic_ncols=True, leave=True)
+        rate = (event.steps - self.steps0) / max(time.perf_counter() - self.wall0, 1e-9)
+        self.bar.n = event.done
+        self.bar.set_postfix_str(f"t={event.simulated_s:.2f} s, {rate:.0f} steps/s", refresh=False)
+        self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _wind(text, turbulence):
+    """``--wind SPEED[,DX,DY,DZ]`` (m/s; direction default +x) → a Wind, or None."""
+    if text is None:
+        return None
+    from ..forces.wind import Wind
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise TailorError(f"--wind: expected SPEED or SPEED,DX,DY,DZ (m/s), got {text!r}") from None
+    if len(values) not in (1, 4) or values[0] < 0 or (len(values) == 4 and not any(values[1:])):
+        raise TailorError(f"--wind: expected SPEED >= 0, or SPEED,DX,DY,DZ with a non-zero direction, got {text!r}")
+    if not 0 <= turbulence <= 2:
+        raise TailorError(f"--turbulence: expected 0 to 2, got {turbulence:g}")
+    return Wind(speed=values[0], direction=tuple(values[1:]) if len(values) == 4 else (1.0, 0.0, 0.0),
+                turbulence=turbulence)
+
+
+def add_drape_command(sub) -> None:
+    """drape."""
+    from ..fabric import fabric_names
+    from ..integrators import INTEGRATORS
+
+    d = sub.add_parser("drape", help="place, sew and drape a pattern on a body; writes an OBJ per frame")
+    d.add_argument("pattern", metavar="PATTERN")
+    d.add_argument("--body", default="mannequin", help="mannequin (default), mannequin-walk, or a body file/folder")
+    d.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
+    d.add_argument("--up", default="auto", choices=UP_CHOICES, help="the file's axis that points up (a negative one as --up=-y)")
+    d.add_argument("--facing", default="auto")
+    d.add_argument("--base", help="base mesh of a PC2 body")
+    d.add_argument("--body-fps", type=float, metavar="FPS", help="frame rate of a moving body (default: the file's, else 25)")
+    d.add_argument("--grade", choices=["none", "auto"], default="none",
+                   help="auto: resize the pattern to the body first (its girths across, its lengths along)")
+    d.add_argument("--design-body", default="mannequin", metavar="BODY|YAML", help="the body the pattern was drafted for: a body file or name, or a GarmentCode measurement YAML (default: mannequin, GarmentCode's mean body)")
+    d.add_argument("--fabric", choices=fabric_names(), help="override the pattern's fabric")
+    d.add_argument("--frames", type=int, default=25, help="frames after dressing (default 25)")
+    d.add_argument("--fps", type=float, default=25.0)
+    d.add_argument("--resolution", type=float, default=2.0, metavar="CM", help="mesh edge length (cm, default 2)")
+    d.add_argument("--integrator", default="implicit", choices=list(INTEGRATORS))
+    d.add_argument("--quality", default="final", choices=["draft", "normal", "final"],
+                   help="speed/accuracy of the implicit step (default final; see `tailor bench`)")
+    d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
+    d.add_argument("--self-collision", default="auto", choices=["auto", "on", "off"],
+                   help="cloth-cloth contact once the garment is sewn: auto (default) = only where it can "
+                        "touch itself, on = everywhere, off = none")
+    d.add_argument("--wind", metavar="SPEED[,DX,DY,DZ]",
+                   help="wind on the sewn garment, m/s (direction default +x; a breeze 3, a gale 20)")
+    d.add_argument("--turbulence", type=float, default=0.3, help="gust strength relative to the wind speed (default 0.3)")
+    d.add_argument("--cuts", metavar="FILE", help="a cuts file: the brush cuts holes or slits at given times "
+                   "(JSON, cm; see docs/pattern-format.md)")
+    d.add_argument("--tear", action="store_true", help="let the garment tear beyond its fabric's tear_strain")
+    d.add_argument("--record-sewing", action="store_true", help="also write the sewing and settling frames")
+    d.add_argument("--with-body", action="store_true", help="also write the body of every frame")
+    d.add_argument("--out", metavar="DIR", help="output folder (default out/<pattern name>)")
+    d.add_argument("--overwrite", action="store_true", help="replace an existing output folder")
+    d.add_argument("--format", action="append", metavar="FMT",
+                   help="also export as pc2, glb, usd or usda (repeat or comma-separate; the OBJ frames are always written)")
+    d.add_argument("--preview", action="store_true", help="render preview frames and a GIF into OUT/preview")
+    preview_options(d)
+    d.set_defaults(func=_cmd_drape)

@@ -1,0 +1,45 @@
+"""Body contacts handed from a collision response to the next implicit step.
+
+A :class:`Contacts` is what the body's response (:meth:`tailor.collide.BodyCollider.respond`) and
+its landing prediction find, and what the implicit integrator holds within its solve (Baraff &
+Witkin 1998's velocity constraints): the one record that travels between the two, by value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Contacts", "NO_CONTACTS"]
+
+
+@dataclass(frozen=True, slots=True)
+class Contacts:
+    """Body contacts to hold during the next implicit step.
+
+    Vertex ``ids[k]`` ends the step with velocity ``normal_velocity[k]`` along the unit
+    ``normals[k]`` (the body's own normal velocity: no approach), free in the tangent plane —
+    unless ``stick[k]``: then it keeps the body's velocity ``body_velocity[k]`` entirely (static
+    friction), as long as the reaction stays inside the Coulomb cone of ``friction[k]``.
+    ``vertex_count`` is the size of the model they were found for; they are ignored on another.
+    """
+
+    ids: np.ndarray
+    normals: np.ndarray
+    normal_velocity: np.ndarray
+    vertex_count: int
+    stick: np.ndarray | None = None
+    body_velocity: np.ndarray | None = None
+    friction: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def valid_for(self, model) -> bool:
+        """Whether they were found for ``model``'s numbering of the vertices (and hold any)."""
+        return self.vertex_count == model.vertex_count and len(self.ids) > 0
+
+
+NO_CONTACTS = Contacts(np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0), 0)
+"""No contact at all (valid for no model)."""

@@ -1,0 +1,250 @@
+"""Every contact the cloth has, after every step, in one order: the :class:`ContactPipeline`.
+
+After a step the cloth is kept on its side of the limb walls (garments rolled round one of a pair
+of limbs, :func:`~tailor.placement.limb_walls`), attached vertices follow their body points
+(Carignan Eq. 19–20), the body pushes the cloth out with friction (Eq. 9–14,
+:class:`~tailor.collide.BodyCollider`) and the cloth is kept from passing through itself (Eq. 5–8,
+:class:`~tailor.collide.SelfCollider`): after the body, so a layer the body pushed out pushes the
+next one. The body's resting contacts are handed to the next implicit step, which holds them
+within its solve, and the landing prediction tells that step which vertices it will bring onto
+the body. :func:`tailor.sim.simulate`, :func:`tailor.scenes.run_scene`,
+:func:`tailor.tearing.simulate_tearing` and :func:`tailor.dress.drape` all use this one pipeline.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, SelfCollider
+from .errors import SimulationError
+
+__all__ = ["ContactPipeline", "ContactSettings", "StaticBody", "Attachments", "LimbWallContact", "BODY_MARGIN",
+           "body_margin", "check_self_collision"]
+
+BODY_MARGIN = 0.03
+"""Body contact query radius [m]: candidates are reused while no cloth vertex moves half of it, and a
+vertex found deeper than half of it is judged against the closed surface (walking limbs move ~1 cm a step)."""
+
+
+def body_margin(thickness: float) -> float:
+    """The body contact margin for cloth ``thickness`` [m]: :data:`BODY_MARGIN`, or twice the thickness."""
+    return max(BODY_MARGIN, 2.0 * thickness)
+
+
+def check_self_collision(mode: str) -> str:
+    """``mode`` if it names a self-collision mode; a one-line SimulationError otherwise."""
+    if mode not in SELF_COLLISION_MODES:
+        raise SimulationError(f"self_collision must be one of {', '.join(SELF_COLLISION_MODES)}, got {mode!r}")
+    return mode
+
+
+@dataclass(frozen=True, slots=True)
+class ContactSettings:
+    """What contact does in a phase of a simulation.
+
+    Attributes
+    ----------
+    friction_scale : float
+        Fraction of the fabric's friction acting on the body (0 while sewing: panels slide into place).
+    hold : bool
+        Hand resting body contacts to the next implicit step and predict landings within it.
+    self_collision : bool
+        Whether cloth–cloth contact acts (not while sewing: seam edges must be free to meet).
+    """
+
+    friction_scale: float = 1.0
+    hold: bool = True
+    self_collision: bool = True
+
+
+class BodyMotion(Protocol):
+    """The body over time: ``at(t) -> (positions, velocities, collider frame)``."""
+
+    def at(self, t: float): ...
+
+
+class StaticBody:
+    """A body that does not move (the reference scenes' sphere, floor and boxes)."""
+
+    def __init__(self, vertices):
+        self.x = np.asarray(vertices, float)
+        self.v = np.zeros_like(self.x)
+
+    def at(self, t: float):
+        return self.x, self.v, 0
+
+
+class Attachments:
+    """Vertices held to body points (Eq. 19–20): barycentric on a body triangle, offset along its normal."""
+
+    def __init__(self, ids, tri, bary, offset, faces):
+        self.ids, self.tri, self.bary, self.offset, self.faces = ids, tri, bary, offset, faces
+
+    def apply(self, state, body_x, body_v) -> None:
+        f = self.faces[self.tri]
+        p = (body_x[f] * self.bary[:, :, None]).sum(axis=1)
+        a, b, c = body_x[f[:, 0]], body_x[f[:, 1]], body_x[f[:, 2]]
+        n = np.cross(b - a, c - a)
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        state.x[self.ids] = p + self.offset[:, None] * n
+        state.v[self.ids] = (body_v[f] * self.bary[:, :, None]).sum(axis=1)
+
+    def renumbered(self, inverse) -> "Attachments":
+        """The same attachments after a renumbering (``inverse``: old vertex → new, −1 gone)."""
+        ids = inverse[self.ids]
+        ok = ids >= 0
+        return Attachments(ids[ok], self.tri[ok], self.bary[ok], self.offset[ok], self.faces)
+
+
+class LimbWallContact:
+    """A leg's panels stay on their side of the plane between the legs, below the limb's landmark,
+    as the body moves (:func:`~tailor.placement.limb_walls`): inelastic, like a body contact.
+
+    ``walls`` are the garment's :class:`~tailor.placement.LimbWalls`; ``mesh`` and ``weld`` number
+    its vertices (a welded vertex whose members agree on one wall keeps to it).
+    """
+
+    def __init__(self, walls, mesh, weld, thickness: float):
+        self.walls, self.thickness = walls, thickness
+        nw = int(weld.max()) + 1
+        lo, hi = np.full(nw, walls.count), np.full(nw, -1)
+        of = walls.of(mesh)
+        np.minimum.at(lo, weld, of)
+        np.maximum.at(hi, weld, of)
+        self.ids = np.flatnonzero((lo == hi) & (hi >= 0))
+        self.which = hi[self.ids]
+
+    def apply(self, state, body_x, body_v) -> None:
+        if not len(self.ids):
+            return
+        normal, offset, height, speed = self.walls.at(body_x, body_v)
+        n, x = normal[self.which], state.x[self.ids]
+        depth = self.thickness - (np.einsum("ij,ij->i", x, n) - offset[self.which])
+        hit = (depth > 0) & (x[:, 2] < height[self.which])
+        if hit.any():
+            i, nh = self.ids[hit], n[hit]
+            state.x[i] += depth[hit, None] * nh
+            vn = np.einsum("ij,ij->i", state.v[i], nh) - speed[self.which[hit]]
+            state.v[i] -= np.minimum(vn, 0.0)[:, None] * nh
+
+
+class ContactPipeline:
+    """The contacts of one cloth over a (moving) body, after every step (module docstring).
+
+    Parameters
+    ----------
+    body : BodyCollider, optional
+        The body's collider (None: no body).
+    motion : BodyMotion
+        Where the body is at a time (:class:`StaticBody` for one that does not move).
+    thickness : float
+        Distance kept from the body and between layers of cloth [m].
+    friction : float or (N,) per vertex
+        Coulomb coefficient of the cloth on the body (and, averaged, on itself).
+    self_collision : {"auto", "on", "off"}
+    self_margin : float
+        Query margin of the self-collision broad phase [m].
+    """
+
+    def __init__(self, body: BodyCollider | None, motion: BodyMotion | None, *, thickness: float, friction,
+                 self_collision: str = "off", self_margin: float = 0.01):
+        self.body, self.motion, self.thickness = body, motion, float(thickness)
+        self.friction = friction
+        self.self_mode = check_self_collision(self_collision)
+        self.self_margin = self_margin
+        self.settings = ContactSettings()
+        self.constraints: tuple = ()
+        self.pending: Contacts | None = None  # body contacts the next implicit step holds
+        self.rescued = 0
+        self._version = 0  # topology changes (cuts, tears) so far
+        self._self: SelfCollider | None = None
+        self._self_key = None
+        self._inv_mass = None
+
+    def configure(self, settings: ContactSettings) -> None:
+        """What contact does from now on (a new phase)."""
+        self.settings = settings
+
+    def constrain(self, *constraints) -> None:
+        """Constraints applied before the body each step (``apply(state, body_x, body_v)``): limb walls, attachments."""
+        self.constraints = tuple(c for c in constraints if c is not None)
+
+    def follow(self, friction) -> None:
+        """The cloth's vertices were welded (their count changed; the colliders notice by it):
+        the friction per new vertex."""
+        self.friction = friction
+
+    def forget(self) -> None:
+        """The cloth's topology changed (a cut or a tear): drop everything known per vertex."""
+        self._version += 1
+        self.pending = None
+        if self.body is not None:
+            self.body.forget()
+
+    def predict(self, model, state, x_end, v_end, dt, held) -> Contacts | None:
+        """The vertices a solved step would bring onto the body, as it is at the step's end."""
+        if self.body is None or not self.settings.hold:
+            return None
+        bx, bv, k = self.motion.at(state.t + dt)
+        return self.body.landing(model, x_end, v_end, dt, bx, bv, k, thickness=self.thickness, skip=held)
+
+    def hold(self, model) -> Contacts | None:
+        """The body contacts the next step should hold (those the last response left resting)."""
+        return self.pending
+
+    def respond(self, model, state, dt: float, impulses=None) -> None:
+        """Every contact of ``state`` after a step, in place; ``impulses`` the step's held-contact impulses."""
+        bx, bv, k = self.motion.at(state.t) if self.motion is not None else (None, None, 0)
+        for constraint in self.constraints:
+            constraint.apply(state, bx, bv)
+        if self.body is not None:
+            mu = self.friction * self.settings.friction_scale
+            contacts = self.body.respond(model, state, dt, bx, bv, k, thickness=self.thickness, friction=mu,
+                                         impulse=impulses)
+            self.pending = contacts if self.settings.hold else None
+        if self.self_mode != "off" and self.settings.self_collision:
+            self.self_collider(model, state.x).respond(self._inv_mass, state, dt)
+
+    def self_collider(self, model, x) -> SelfCollider:
+        """The self-collider of ``model``'s numbering, built from positions ``x`` when it changed."""
+        key = (model.vertex_count, self._version)
+        if self._self is None or self._self_key != key:
+            stats = self._self.stats if self._self is not None else None
+            friction = float(np.mean(self.friction * self.settings.friction_scale))
+            self._self = SelfCollider(model.faces, model.face_panel, x, thickness=self.thickness, margin=self.self_margin,
+                                      mode=self.self_mode, friction=friction)
+            if stats is not None:
+                self._self.carry_stats(stats)
+            self._self_key = key
+            self._inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
+        return self._self
+
+    def rescue(self, model, state) -> int:
+        """Vertices trapped inside the body go back out (:meth:`BodyCollider.rescue`); how many."""
+        if self.body is None:
+            return 0
+        bx, bv, k = self.motion.at(state.t)
+        moved = self.body.rescue(model, state, bx, bv, k, thickness=self.thickness)
+        self.rescued += moved
+        return moved
+
+    def penetration(self, x, t: float) -> float:
+        """How deep [m] the deepest vertex of ``x`` is inside the body at time ``t`` (0: none)."""
+        if self.body is None:
+            return 0.0
+        bx, _, k = self.motion.at(t)
+        dist, tri, _, _ = self.body.nearest(x, bx, k)
+        inside = dist[tri >= 0]
+        return float(max(0.0, -inside.min())) if len(inside) else 0.0
+
+    def self_report(self) -> dict:
+        """What the self-collision pass did, for report.json."""
+        return self._self.report() if self._self is not None else {"mode": self.self_mode}
+
+    @property
+    def deepest(self) -> float:
+        """Deepest penetration [m] any body response had to undo."""
+        return self.body.deepest if self.body is not None else 0.0

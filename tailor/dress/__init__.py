@@ -1,0 +1,149 @@
+"""The main job: place, sew and drape a garment on a (moving) body (Carignan §3–4).
+
+:func:`drape` is short orchestration over named parts: :mod:`.options` (what is asked, and every
+phase's settings), :mod:`.timeline` (the body over time), :mod:`.garment` (the one owner of the
+vertex numbering), the :class:`~tailor.contact.ContactPipeline` (walls, attachments, body,
+self-contact, rescue), :mod:`.phases` (sew, settle, transition, animate) and :mod:`.report`.
+Nothing here writes files: frames go to the caller (``on_frame``) and into the result.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+from ..collide import BodyCollider, InsideTest
+from ..contact import ContactPipeline, body_margin
+from ..integrators import make_integrator
+from ..measure import measure_body
+from ..mesh import discretise
+from ..placement import limb_walls, place_panels
+from ..sim import quality as sim_quality
+from ..sizing import check_loops
+from .garment import Garment
+from .options import DRAPE_RESOLUTION, DrapeOptions
+from .phases import Dressing, animate, settle, sew, transition
+from .report import DrapeProgress, DrapeReport, DrapeResult, PhaseReport
+from .timeline import Timeline
+
+__all__ = ["drape", "prepare", "DrapeResult", "DrapeReport", "DrapeProgress", "DrapeOptions", "PhaseReport", "DRAPE_RESOLUTION"]
+
+
+def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: DrapeOptions | None = None,
+          **kwargs) -> DrapeResult:
+    """Dress ``body`` in ``pattern`` and animate it.
+
+    Parameters
+    ----------
+    pattern : Pattern
+    body : Body
+        Static or moving (:func:`tailor.io.body_files.read_body`).
+    fabric : Fabric or str, optional
+        Overrides the pattern's fabric (panels with their own keep theirs).
+    on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
+    progress : callable ``progress(DrapeProgress)``, optional
+        Called after every frame of every phase.
+    options : DrapeOptions, optional
+        Or its fields as keyword arguments:
+
+        - ``frames`` (25): frames to produce after the garment is dressed (frame 0 included);
+        - ``fps`` (25); ``resolution``: mesh edge length [m] (:data:`DRAPE_RESOLUTION`, 2 cm);
+        - ``integrator`` ("implicit"): see :mod:`tailor.integrators`;
+        - ``sew_timeout`` (4 s), ``settle`` (1 s);
+        - ``record_sewing``: also return the sewing and settling as frames (before frame 0);
+        - ``self_collision`` ("auto"): cloth–cloth contact from the moment the garment is sewn;
+          ``auto`` checks only the regions that can touch themselves, ``on``, ``off``;
+        - ``quality`` ("final"): implicit step and solver tolerance (:data:`tailor.sim.QUALITY`);
+        - ``wind``: a :class:`~tailor.forces.wind.Wind` or (3,) air velocity, blowing once sewn;
+        - ``cuts``: :class:`~tailor.tearing.Cut` on the dressed garment, ``time`` from frame 0,
+          points in the body's frame [m]; made after the first step ending at or after its time;
+        - ``tear``: the garment tears where stretched across an edge beyond its fabric's
+          ``tear_strain``. With cuts or tearing see :attr:`DrapeResult.topology`.
+
+    Raises
+    ------
+    SimulationError
+        An invalid option; seams that do not close within ``sew_timeout``; SimulationUnstable.
+    """
+    t_start = time.perf_counter()
+    opts = options or DrapeOptions(fabric=fabric, **kwargs)
+    if options is not None and (fabric is not None or kwargs):
+        opts = replace(options, **kwargs, **({"fabric": fabric} if fabric is not None else {}))
+    d, loops, x0 = prepare(pattern, body, opts, on_frame, progress)
+    report = _header(d, pattern, body, loops, opts)
+    state, report.phases["sewing"] = sew(d, x0)
+    state, report.phases["settling"] = settle(d, state)
+    state, phase = transition(d, state)
+    if phase is not None:
+        report.phases["transition"] = phase
+    state, report.phases["motion"], report.max_penetration_m_per_frame, report.self_intersections_per_frame = animate(d, state)
+    _close(report, d, t_start)
+    return DrapeResult(d.frames, d.body_frames, *d.first_topology, body.faces, pattern, report, topology=d.topology)
+
+
+def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
+    """The garment placed round the body, the timeline, the contacts: a :class:`Dressing` ready to
+    sew; also the pattern's loops checked against the body and the placed positions."""
+    base = opts.fabric or pattern.fabric
+    fabrics = {i: (p.fabric or base) for i, p in enumerate(pattern.panels)}
+    mesh = discretise(pattern, opts.resolution)
+    integ = make_integrator(opts.integrator)
+    q = sim_quality(opts.quality)
+    # implicit steps shrink with the mesh: body contact is resolved once a step, so a vertex must
+    # not move far compared with its triangles (docs/measurements.md)
+    timeline = Timeline(body, None if integ.explicit else min(q.step, q.step_per_resolution * opts.resolution))
+    landmarks = measure_body(body, timeline.pose)
+    loops = check_loops(pattern, landmarks)  # a loop too small for the body fails now, not at the sewing time-out
+    x0 = place_panels(pattern, mesh, landmarks, inside=InsideTest(timeline.pose, body.faces))
+    walls = limb_walls(pattern, landmarks, timeline.pose) if opts.limb_walls else None
+    garment = Garment(pattern, mesh, fabrics, merge_distance=max(0.3 * opts.resolution, 0.002))
+    collider = BodyCollider(timeline.collider_frames, body.faces, margin=body_margin(garment.thickness))
+    timeline.follow_collider(collider.margin)
+    contacts = ContactPipeline(collider, timeline, thickness=garment.thickness, friction=garment.friction,
+                               self_collision=opts.self_collision)
+    d = Dressing(opts, garment, timeline, contacts, integ, q, walls=walls, on_frame=on_frame, progress=progress)
+    return d, loops, x0
+
+
+def _header(d: Dressing, pattern, body, loops, opts: DrapeOptions) -> DrapeReport:
+    """The report's inputs and derived parameters, known before the simulation starts."""
+    g, q = d.garment, d.quality
+    unwelded = g.unwelded
+    walls = d.walls
+    return DrapeReport(
+        vertices=int(g.mesh.vertex_count), faces=int(g.mesh.face_count), resolution_m=opts.resolution, fps=opts.fps,
+        integrator=opts.integrator, time_step_eq24_s=unwelded.time_step, seam_pairs=len(g.sewing.pairs),
+        loops={lp.landmark: {"panels": list(lp.panels), "length_cm": round(lp.length * 100, 1),
+                             "body_cm": round(lp.girth * 100, 1), "ease_cm": round(lp.ease * 100, 1)} for lp in loops},
+        fabrics={p.name: g.fabrics[i].name for i, p in enumerate(pattern.panels)},
+        body={**body.report, "name": body.name, "fps": body.fps, "frames": body.frame_count},
+        params={p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
+        quality={"name": q.name, "max_step_s": q.step, "solver_tolerance": q.tolerance},
+        active={"bending": unwelded.has_bending, "air": True, "wind": opts.wind is not None, "body_collision": True,
+                "self_collision": opts.self_collision,
+                "limb_walls": [p.name for i, p in enumerate(pattern.panels) if walls is not None and walls.panel[i] >= 0],
+                **({"cuts": len(opts.cuts), "tearing": opts.tear} if opts.cuts or opts.tear else {})},
+        skipped=[reason for cond, reason in (
+            (not unwelded.has_bending, "bending (every fabric has bending number 0)"),
+            (opts.self_collision == "off", "self-collision (--self-collision off)"),
+            (True, "body triangles farther than the contact margin from the cloth (FCL broad phase)"),
+        ) if cond])
+
+
+def _close(report: DrapeReport, d: Dressing, t_start: float) -> None:
+    """The report's totals once the last frame is out."""
+    counters = d.integrator.counters
+    pen = report.max_penetration_m_per_frame
+    report.max_penetration_m = max(pen) if pen else 0.0
+    report.wall_s = time.perf_counter() - t_start
+    report.steps = d.stepper.steps
+    report.cg_iterations = counters.iterations
+    report.halved_steps = counters.halved_steps()
+    report.body_bvh_queries = d.contacts.body.queries
+    report.max_contact_correction_m = d.contacts.deepest
+    report.vertices_rescued_from_inside_body = d.contacts.rescued
+    report.welded_vertices = int(d.garment.model.vertex_count)
+    report.self_collision = d.contacts.self_report()
+    tearing = d.garment.tearing_report(d.timeline.motion_start)
+    if tearing is not None:
+        report.tearing = {**tearing, "topology_changes": len(d.topology)}

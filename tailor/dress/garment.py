@@ -1,0 +1,159 @@
+"""The garment being dressed: the one owner of its vertex numbering.
+
+Sewing welds seam pairs (Carignan Eq. 16–18), and cuts and tears split vertices; each changes the
+numbering of the simulated vertices. :class:`Garment` holds the mesh, the weld (mesh vertex →
+simulated vertex), the model built on it, the friction and pins per simulated vertex, and after
+each change says so, so the contacts and the integrator can follow.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..contact import Attachments
+from ..forces import total_forces
+from ..model import AIR_DENSITY, build_model
+from ..seams import Sewing, merge_state
+from ..tearing import TearableCloth
+from .options import COMPRESSION, NEAR_RATE, NEAR_SEAM
+
+__all__ = ["Garment", "attachment_vertices"]
+
+GRAVITY = (0.0, 0.0, -9.80665)
+
+
+def attachment_vertices(pattern, mesh, attachment) -> np.ndarray:
+    """Mesh vertices of one of the pattern's attachments (a panel corner, or a stretch of an edge)."""
+    pi = pattern.panel_index(attachment.panel)
+    if attachment.vertex is not None:
+        panel = pattern.panels[pi]
+        edge = next(k for k, e in enumerate(panel.edges) if e.endpoints[0] == attachment.vertex)
+        return mesh.edge_vertices[(pi, None, edge)][:1]
+    ids = mesh.edge_vertices[(pi, attachment.hole, attachment.edge)]
+    t = np.linspace(0.0, 1.0, len(ids))
+    lo, hi = min(attachment.start, attachment.end), max(attachment.start, attachment.end)
+    return ids[(t >= lo - 1e-9) & (t <= hi + 1e-9)]
+
+
+class Garment:
+    """A discretised pattern's simulated vertices, as sewing and tearing renumber them.
+
+    Parameters
+    ----------
+    pattern : Pattern
+    mesh : GarmentMesh
+    fabrics : dict panel index → Fabric
+    merge_distance : float
+        Eq. 16's d [m] at the start of sewing.
+    """
+
+    def __init__(self, pattern, mesh, fabrics: dict, merge_distance: float):
+        self.pattern, self.mesh, self.fabrics = pattern, mesh, fabrics
+        self.unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)
+        self.mass = np.asarray(self.unwelded.vertex_mass)
+        self._panel_friction = np.array([fabrics[i].friction for i in range(len(pattern.panels))])
+        self.sewing = Sewing(mesh.seam_pairs, merge_distance=merge_distance)
+        self.weld = np.arange(mesh.vertex_count)
+        self.friction = self._panel_friction[mesh.vertex_panel]
+        self.pins = np.zeros(0, np.intp)  # mesh vertices held to the body
+        self.gravity = False
+        self.rebuilds = 0
+        self.cloth: TearableCloth | None = None
+        pairs = self.sewing.open_pairs(self.weld)
+        self.model = replace(self.unwelded, gravity=np.zeros(3)).with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
+
+    @property
+    def thickness(self) -> float:
+        """Distance kept from the body and between layers [m]: the thickest fabric plus 2 mm."""
+        return max(f.thickness for f in self.fabrics.values()) + 0.002
+
+    def frame(self, state) -> np.ndarray:
+        """Positions of every mesh vertex (seam copies included), as frames are written."""
+        return state.x[self.weld]
+
+    def forces(self, wind=None):
+        """``forces(model, state)``: the cloth's own (Eq. 1–4, wind) plus the open seams' pull (Eq. 15)."""
+        def forces(model, state):
+            return self.sewing.forces(model, state, self.weld, total_forces(model, state, wind=wind))
+        return forces
+
+    def stiffen_near_pairs(self, x) -> None:
+        """Open seam pairs closer than :data:`NEAR_SEAM` get stiff implicit springs for the next frame."""
+        m = self.model
+        if len(m.pair_vertices):
+            k, c = self.sewing.near_stiffness(x, m.pair_vertices, m.vertex_mass, near=NEAR_SEAM, rate=NEAR_RATE)
+            self.model = replace(m, pair_stiffness=k, pair_damping=c)
+
+    def rebuild(self, state):
+        """Weld the merged pairs into one particle each and carry the state over (Eq. 17–18)."""
+        x_orig, v_orig = state.x[self.weld], state.v[self.weld]
+        new = self.sewing.weld_map(self.mesh.vertex_count)
+        xw, vw = merge_state(x_orig, v_orig, self.mass, new)
+        m = build_model(self.mesh, self.fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
+                        gravity=GRAVITY if self.gravity else (0.0, 0.0, 0.0))
+        if len(self.pins):
+            m = m.with_pins(np.unique(new[self.pins]))
+        if self.sewing.open_count:
+            pairs = self.sewing.open_pairs(new)
+            m = m.with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
+        self.weld, self.model = new, m
+        self.friction = self._panel_friction[self.mesh.vertex_panel[np.unique(new, return_index=True)[1]]]
+        self.rebuilds += 1
+        out = m.state(xw, vw, 0.0)
+        out.t = state.t
+        return out
+
+    def attach(self, state, collider, pose):
+        """Gravity on, the pattern's attachments pinned where they lie on the body (Eq. 19–20).
+
+        Returns (state of the rebuilt model, :class:`~tailor.contact.Attachments` or None)."""
+        held = [attachment_vertices(self.pattern, self.mesh, a) for a in self.pattern.attachments]
+        self.gravity = True
+        if held:
+            ids = np.unique(np.concatenate(held))
+            dist, tri, bary, _ = collider.nearest(state.x[self.weld[ids]], pose, 0, cache=False)
+            ok = tri >= 0
+            self.pins = ids[ok]
+        state = self.rebuild(state)
+        if not len(self.pins):
+            return state, None
+        wid, first = np.unique(self.weld[self.pins], return_index=True)
+        return state, Attachments(wid, tri[ok][first], bary[ok][first], np.maximum(dist[ok][first], self.thickness),
+                                  collider.faces)
+
+    def allow_changes(self, tear: bool) -> float:
+        """From now on the mesh may be cut (and torn, with ``tear``): a TearableCloth owns it.
+
+        Returns the tear strain (the smallest among the panels' fabrics; 0: no tearing)."""
+        strain = min((f.tear_strain for f in self.fabrics.values() if f.tear_strain > 0), default=0.0) if tear else 0.0
+
+        def build(mesh_, pinned, weld):
+            m = build_model(mesh_, self.fabrics, air_density=AIR_DENSITY, weld=weld, compression=COMPRESSION)
+            return m.with_pins(np.flatnonzero(pinned)) if pinned.any() else m
+
+        self.cloth = TearableCloth(self.mesh, build, tear_strain=strain, pinned=self.model.vertex_pinned, weld=self.weld)
+        self.model = self.cloth.model
+        return strain
+
+    def tearing_report(self, t0: float) -> dict | None:
+        """What was cut and torn (None if the mesh could not change); event times from ``t0``."""
+        c = self.cloth
+        if c is None:
+            return None
+        return {"tear_strain": c.tear_strain, "edges_torn": c.tears,
+                "events": [{"t_s": round(t - t0, 6), "edges": e} for t, e in c.events]}
+
+    def change(self, state, due: list, t0: float):
+        """Cuts of ``due`` (times from ``t0``; removed from it), then tearing; returns (state, old → new
+        vertex map or None)."""
+        old = self.cloth.model.vertex_count
+        state, changed = self.cloth.change(state, due, t0=t0, tol=1e-9)
+        if not changed:
+            return state, None
+        inverse = np.full(old, -1, np.intp)  # old simulated vertex → its new index (the first copy)
+        inverse[self.cloth.last_source[::-1]] = np.arange(len(self.cloth.last_source))[::-1]
+        self.model, self.weld, self.mesh = self.cloth.model, self.cloth.weld, self.cloth.mesh
+        self.friction = self._panel_friction[self.mesh.vertex_panel[np.unique(self.weld, return_index=True)[1]]]
+        return state, inverse

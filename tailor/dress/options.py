@@ -1,0 +1,163 @@
+"""What a drape is asked to do (:class:`DrapeOptions`) and what each of its phases does (:class:`PhaseSettings`).
+
+Every threshold of the dressing lives here, with the reason for its value.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..collide import SELF_COLLISION_MODES
+from ..contact import ContactSettings
+from ..errors import SimulationError
+from ..fabric import Fabric, preset
+from ..integrators import INTEGRATORS
+from ..sim import QUALITY
+from ..tearing import Cut
+
+__all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
+           "NEAR_SEAM", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_KEYS", "STRAGGLERS", "MIN_STRAGGLERS",
+           "STRAGGLER_REACH", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH"]
+
+DRAPE_RESOLUTION = 0.02
+"""Default garment mesh edge length [m] of :func:`~tailor.dress.drape` and ``tailor drape`` (2 cm)."""
+
+NEAR_SEAM = 0.08
+"""Seam pairs closer than this [m] are pulled by stiff implicit springs."""
+
+NEAR_RATE = 80000.0
+"""Their rate k [1/s²] (Eq. 15's k·η folded in): strong enough to stretch a waistband into place."""
+
+COMPRESSION = 0.1
+"""Fraction of the stretch stiffness resisting compression in garments (eased seams gather)."""
+
+TRANSITION_S = 1.0
+"""Seconds a body dressed in its rest pose takes to move into the first frame of its motion."""
+
+TRANSITION_KEYS = 25
+"""Key poses (collision hierarchies) along that transition."""
+
+MOTION_MAX_STRETCH = 5.0
+"""While the body moves, a triangle stretched further than this (or than ``MOTION_STRETCH_GROWTH``
+times the dressed garment's worst) means the run has gone wrong; a hem kicked by a heel reaches 4."""
+
+MOTION_STRETCH_GROWTH = 1.5
+"""See ``MOTION_MAX_STRETCH``."""
+
+STRAGGLERS = 0.02
+"""After ¾ of the sewing time-out, when at most this fraction of pairs (or :data:`MIN_STRAGGLERS`) is
+still open, those closer than :data:`STRAGGLER_REACH` mesh resolutions are merged where they are: the
+last few pairs caught on the body (an underarm corner behind the arm, a dart's mouth) are stitched
+as a tailor would."""
+
+MIN_STRAGGLERS = 3
+"""See ``STRAGGLERS`` (GarmentCode's fitted dress at 4 cm held its last 3 of 116 pairs)."""
+
+STRAGGLER_REACH = 4.0
+"""See ``STRAGGLERS``."""
+
+
+@dataclass(frozen=True, slots=True)
+class PhaseSettings:
+    """What one phase of a drape does.
+
+    Attributes
+    ----------
+    name : str
+    gravity : bool
+        Off while sewing (GarmentCode's zero-gravity warm-up: panels do not sag off the body).
+    contact : ContactSettings
+        Friction on the body, held contacts, self-collision.
+    tolerance : float or None
+        CG tolerance of the implicit solve; None: the quality preset's.
+    max_stretch_change : float
+        Per-step stretch change beyond which an implicit step is halved.
+    wind : bool
+        Whether the wind blows.
+    max_stretch : float or None
+        The guard's stretch limit; None: ``MOTION_MAX_STRETCH`` or growth over the dressed garment.
+    moving : bool
+        Steps follow the near-body speed rule of the timeline (the body moves).
+    """
+
+    name: str
+    gravity: bool
+    contact: ContactSettings
+    tolerance: float | None
+    max_stretch_change: float
+    wind: bool
+    max_stretch: float | None
+    moving: bool
+
+
+SEWING = PhaseSettings(
+    "sewing", gravity=False,
+    # panels slide over the body into place without friction; seam edges must be free to meet
+    contact=ContactSettings(friction_scale=0.0, hold=False, self_collision=False),
+    # sewing is assembly at the same step in every preset, with stiff seam springs pulling panels
+    # metres: a loose solve there blows up (docs/measurements.md)
+    tolerance=QUALITY["final"].tolerance,
+    # the seams' pull stretches the triangles at the seams far in a step by design (merged and
+    # relaxed afterwards): halving those steps only slows the assembly down
+    max_stretch_change=math.inf, wind=False,
+    # a corner pulled three ways may stretch its triangles this far before merging
+    max_stretch=10.0, moving=False)
+SETTLING = PhaseSettings("settling", gravity=True, contact=ContactSettings(), tolerance=None, max_stretch_change=0.3,
+                         wind=True, max_stretch=SEWING.max_stretch, moving=False)
+TRANSITION = PhaseSettings("transition", gravity=True, contact=ContactSettings(), tolerance=None, max_stretch_change=0.3,
+                           wind=True, max_stretch=None, moving=True)
+MOTION = PhaseSettings("motion", gravity=True, contact=ContactSettings(), tolerance=None, max_stretch_change=0.3,
+                       wind=True, max_stretch=None, moving=True)
+
+
+@dataclass(frozen=True)
+class DrapeOptions:
+    """The keyword arguments of :func:`~tailor.dress.drape`, validated once (one-line errors).
+
+    See :func:`~tailor.dress.drape` for their meaning.
+    """
+
+    frames: int = 25
+    fps: float = 25.0
+    resolution: float = DRAPE_RESOLUTION
+    integrator: str = "implicit"
+    sew_timeout: float = 4.0
+    settle: float = 1.0
+    record_sewing: bool = False
+    self_collision: str = "auto"
+    quality: str = "final"
+    wind: object = None
+    cuts: tuple = field(default=())
+    tear: bool = False
+    fabric: Fabric | None = None
+    limb_walls: bool = True
+    """Keep each leg's panels on their side of the plane between the legs (off: to see what that prevents)."""
+
+    def __post_init__(self):
+        if isinstance(self.fabric, str):
+            object.__setattr__(self, "fabric", preset(self.fabric))
+        object.__setattr__(self, "cuts", tuple(sorted(self.cuts, key=lambda c: c.time))
+                           if all(isinstance(c, Cut) for c in self.cuts) else self._fail("cuts", self.cuts,
+                                                                                            "tailor.tearing.Cut objects"))
+        self._check_numbers()
+        for name, value, choices in (("self_collision", self.self_collision, SELF_COLLISION_MODES),
+                                     ("quality", self.quality, tuple(QUALITY)), ("integrator", self.integrator, tuple(INTEGRATORS))):
+            if value not in choices:
+                self._fail(name, value, "one of " + ", ".join(choices))
+
+    def _check_numbers(self) -> None:
+        if not (isinstance(self.frames, (int, np.integer)) and self.frames >= 1):
+            self._fail("frames", self.frames, "a whole number of at least 1")
+        for name in ("fps", "resolution", "sew_timeout"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float, np.number)) and math.isfinite(value) and value > 0):
+                self._fail(name, value, "a positive number")
+        if not (math.isfinite(self.settle) and self.settle >= 0):
+            self._fail("settle", self.settle, "a number of seconds, 0 or more")
+
+    @staticmethod
+    def _fail(name, value, expected):
+        raise SimulationError(f"drape option {name} must be {expected}, got {value!r}")

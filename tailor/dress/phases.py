@@ -1,0 +1,234 @@
+"""The phases of a drape (Carignan §3–4), each short and testable alone on a :class:`Dressing`.
+
+1. :func:`sew` — body still, gravity off, seaming forces (Eq. 15) pull the placed panels together
+   and pairs merge (Eq. 16–18) until every seam is closed, or a time-out raises
+   :class:`~tailor.errors.SimulationError` naming the widest open seam;
+2. :func:`settle` — gravity on, attachments hold (Eq. 19–20), the garment comes to rest;
+3. :func:`transition` — a body dressed in its neutral pose moves into its motion's first frame;
+4. :func:`animate` — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
+
+Each returns the state it ends with and its :class:`~.report.PhaseReport`.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..collide import self_intersections
+from ..contact import LimbWallContact
+from ..errors import SimulationError
+from ..integrators import SolverSettings
+from ..sim import Guard, Stepper, max_stretch
+from .options import (MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
+                      STRAGGLERS, TRANSITION, TRANSITION_S, MOTION, DrapeOptions, PhaseSettings)
+from .report import DrapeProgress, PhaseReport
+
+__all__ = ["Dressing", "sew", "settle", "transition", "animate"]
+
+
+class Dressing:
+    """One drape in progress: the garment, the body's timeline, the contacts and the step loop.
+
+    It owns the frames produced so far and the settings of the current phase; the phases below
+    drive it.
+    """
+
+    def __init__(self, options: DrapeOptions, garment, timeline, contacts, integrator, quality, *, walls=None,
+                 on_frame=None, progress=None):
+        self.options, self.garment, self.timeline, self.contacts = options, garment, timeline, contacts
+        self.walls, self.attachments = walls, None
+        self.integrator, self.quality = integrator, quality
+        self.stepper = Stepper(integrator, contacts=contacts)
+        self.on_frame, self.progress = on_frame, progress
+        self.phase: PhaseSettings = SEWING
+        self.motion_limit = MOTION_MAX_STRETCH
+        self.frames: list = []
+        self.body_frames: list = []
+        self.topology: list = []  # (first frame, mesh, weld) after each cut or tear
+        self.first_topology = (garment.mesh, garment.weld)  # frame 0's
+        self.constrain()
+
+    def constrain(self) -> None:
+        """The contacts' constraints for the garment's current numbering: limb walls, attachments."""
+        g = self.garment
+        walls = LimbWallContact(self.walls, g.mesh, g.weld, g.thickness) if self.walls is not None and self.walls.count else None
+        self.contacts.constrain(walls, self.attachments)
+
+    @property
+    def frame_dt(self) -> float:
+        return 1.0 / self.options.fps
+
+    def enter(self, phase: PhaseSettings) -> None:
+        """Settings of ``phase`` for the integrator, the contacts and the step loop."""
+        self.phase = phase
+        wind = self.options.wind if phase.wind else None
+        self.integrator.configure(SolverSettings(phase.tolerance or self.quality.tolerance, phase.max_stretch_change, wind))
+        self.contacts.configure(phase.contact)
+        self.stepper.configure(forces=self.garment.forces(wind),
+                               guard=Guard(max_stretch=phase.max_stretch or self.motion_limit))
+
+    def advance(self, state, duration: float, *, rescue: bool = True):
+        """Simulate ``duration`` s on the current model (then free vertices trapped in the body)."""
+        self.garment.stiffen_near_pairs(state.x)
+        if self.phase.moving:
+            dt = self.timeline.moving_step(state, duration)
+        else:
+            dt = self.timeline.still_step if self.phase.gravity else None  # sewing: the plain implicit step
+        state = self.stepper.advance(self.garment.model, state, duration, dt)
+        if rescue:
+            self.contacts.rescue(self.garment.model, state)
+        return state
+
+    def emit(self, state, body_x) -> None:
+        """A frame out: to the caller's ``on_frame`` and into the result."""
+        x = self.garment.frame(state)
+        if self.on_frame is not None:
+            self.on_frame(len(self.frames), x, body_x)
+        self.frames.append(x.copy())
+        self.body_frames.append(body_x.copy())
+
+    def tell(self, done: int, total: int, state) -> None:
+        if self.progress is not None:
+            self.progress(DrapeProgress(self.phase.name, done, total, float(state.t), self.stepper.steps))
+
+    def weld(self, state):
+        """The merged pairs welded; contacts follow the new numbering; trapped vertices freed."""
+        state = self.garment.rebuild(state)
+        self.contacts.follow(self.garment.friction)
+        self.constrain()
+        self.contacts.rescue(self.garment.model, state)
+        return state
+
+    def change(self, state, due: list):
+        """Due cuts, then tearing; on a change, the contacts, the integrator and the constraints follow."""
+        state, inverse = self.garment.change(state, due, self.timeline.motion_start)
+        if inverse is None:
+            return state
+        if self.attachments is not None:
+            self.attachments = self.attachments.renumbered(inverse)
+        self.contacts.follow(self.garment.friction)
+        self.contacts.forget()
+        self.constrain()
+        self.integrator.reset()
+        self.topology.append((len(self.frames), self.garment.mesh, self.garment.weld.copy()))
+        return state
+
+
+def _widen_merging(sewing, t: float, options: DrapeOptions) -> None:
+    """Late in sewing, Eq. 16's d grows: stragglers held apart by two seams at a corner (half the
+    time-out), then the last few pairs caught on the body (¾ of it, :data:`~.options.STRAGGLERS`)."""
+    if t >= 0.5 * options.sew_timeout:
+        sewing.merge_distance = max(sewing.merge_distance, 0.6 * options.resolution)
+    if t >= 0.75 * options.sew_timeout and sewing.open_count <= max(MIN_STRAGGLERS, STRAGGLERS * len(sewing.pairs)):
+        sewing.merge_distance = max(sewing.merge_distance, STRAGGLER_REACH * options.resolution)
+
+
+def sew(d: Dressing, x0):
+    """Phase 1: the placed panels at ``x0`` sewn, one frame at a time, welding what closed."""
+    t0 = time.perf_counter()
+    d.enter(SEWING)
+    g, sewing = d.garment, d.garment.sewing
+    state = g.model.state(x0)
+    frames, t = 0, 0.0
+    while sewing.open_count and t < d.options.sew_timeout:
+        state = d.advance(state, d.frame_dt)
+        t += d.frame_dt
+        frames += 1
+        _widen_merging(sewing, t, d.options)
+        if sewing.close(g.frame(state)):
+            state = d.weld(state)
+        if d.options.record_sewing:
+            d.emit(state, d.timeline.pose)
+        d.tell(len(sewing.pairs) - sewing.open_count, len(sewing.pairs), state)
+    if sewing.open_count:
+        raise SimulationError(_open_seams(g, state, d.options.sew_timeout))
+    return state, PhaseReport(t, time.perf_counter() - t0, frames,
+                              {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds})
+
+
+def _open_seams(garment, state, timeout: float) -> str:
+    """The sewing time-out's message: the stitch with the widest open gap."""
+    sewing, pattern = garment.sewing, garment.pattern
+    gaps = np.where(sewing.merged, 0.0, sewing.gaps(garment.frame(state)))
+    w = int(np.argmax(gaps))
+    seam = pattern.seams[garment.mesh.seam_pair_seam[w]]
+
+    def side(sd):
+        return f"{sd.panel}" + (f" hole {sd.hole}" if sd.hole is not None else "") + f" edge {sd.edge}"
+
+    return (f"{pattern.source}: pattern.stitches[{seam.index}]: {sewing.open_count} of {len(sewing.pairs)} seam vertex "
+            f"pairs are still open after {timeout:g} s of sewing (widest gap {gaps[w] * 100:.1f} cm, on the stitch "
+            f"{side(seam.a)} to {side(seam.b)}); check that stitch and the placements, or allow more time (--sew-timeout)")
+
+
+def settle(d: Dressing, state):
+    """Phase 2: gravity on, the attachments pinned, the garment comes to rest for ``settle`` s."""
+    t0 = time.perf_counter()
+    state, d.attachments = d.garment.attach(state, d.contacts.body, d.timeline.pose)
+    d.contacts.follow(d.garment.friction)
+    d.constrain()
+    d.enter(SETTLING)
+    count = int(round(d.options.settle * d.options.fps))
+    for i in range(count):
+        state = d.advance(state, d.frame_dt)
+        if d.options.record_sewing:
+            d.emit(state, d.timeline.pose)
+        d.tell(i + 1, count, state)
+    d.motion_limit = max(MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH * max_stretch(d.garment.model, state.x))
+    return state, PhaseReport(d.options.settle, time.perf_counter() - t0)
+
+
+def transition(d: Dressing, state):
+    """Phase 3: a body dressed in its neutral pose moves into the first frame of its motion."""
+    t0 = time.perf_counter()
+    d.timeline.transition_start = state.t
+    d.enter(TRANSITION)
+    if not d.timeline.keys:
+        return state, None
+    count = int(round(TRANSITION_S * d.options.fps))
+    for i in range(count):
+        state = d.advance(state, d.frame_dt)
+        if d.options.record_sewing:
+            d.emit(state, d.timeline.at(state.t)[0])
+        d.tell(i + 1, count, state)
+    return state, PhaseReport(TRANSITION_S, time.perf_counter() - t0)
+
+
+def animate(d: Dressing, state):
+    """Phase 4: the body moves; ``frames`` frames, one every 1/fps s (frame 0: the dressed garment).
+
+    With cuts or tearing the garment may change between steps: the frame's steps are taken one
+    at a time (a crack runs on from step to step, with any integrator). Returns (state, report, per-frame penetration
+    [m], per-frame self-intersecting triangle pairs)."""
+    t0 = time.perf_counter()
+    opts, tl = d.options, d.timeline
+    tl.motion_start = state.t
+    d.first_topology = (d.garment.mesh, d.garment.weld)
+    d.enter(MOTION)
+    due = list(opts.cuts)
+    changing = bool(opts.cuts) or opts.tear
+    if changing:  # the mesh may change: a TearableCloth owns it (and the weld) from here on
+        d.garment.allow_changes(opts.tear)
+    step = tl.motion_step
+    sub = d.stepper.substeps(d.garment.model, d.frame_dt, step)[1]  # the steps of a frame (explicit: Eq. 24's)
+    penetration, crossings = [], []
+    for f in range(opts.frames):
+        if f and not changing:
+            state = d.advance(state, d.frame_dt)
+        elif f:
+            for _ in range(sub):
+                state = d.change(d.advance(state, d.frame_dt / sub, rescue=False), due)
+            d.contacts.rescue(d.garment.model, state)
+        elif changing:
+            state = d.change(state, due)
+        penetration.append(d.contacts.penetration(state.x, state.t))
+        crossings.append(len(self_intersections(state.x, d.garment.model.faces)))  # the cloth through itself
+        d.emit(state, tl.at(state.t)[0])
+        d.tell(f + 1, opts.frames, state)
+    used = tl.steps_used
+    report = PhaseReport((opts.frames - 1) / opts.fps, time.perf_counter() - t0, opts.frames,
+                         {"time_step_s": step, "time_step_still_s": tl.still_step, "body_max_speed_m_s": tl.max_speed,
+                          "time_step_near_s": [min(used), max(used)] if used else None})
+    return state, report, penetration, crossings

@@ -1,0 +1,140 @@
+"""What a drape produced: :class:`DrapeResult` (frames and the meshes to write them with), its typed
+:class:`DrapeReport` (what report.json holds) and the :class:`DrapeProgress` told after each frame."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+__all__ = ["DrapeResult", "DrapeReport", "DrapeProgress", "PhaseReport"]
+
+
+@dataclass(frozen=True)
+class DrapeProgress:
+    """What :func:`~tailor.dress.drape` reports to its ``progress`` callback after every frame.
+
+    Attributes
+    ----------
+    phase : str
+        ``sewing``, ``settling``, ``transition`` (into the motion's first pose) or ``motion``.
+    done, total : int
+        Seam vertex pairs welded (sewing) or frames simulated (other phases) of this phase.
+    simulated_s : float
+        Simulated time so far, all phases [s].
+    steps : int
+        Integrator steps so far, all phases.
+    """
+
+    phase: str
+    done: int
+    total: int
+    simulated_s: float
+    steps: int
+
+
+@dataclass
+class PhaseReport:
+    """One phase: simulated and wall time, frames, and what only that phase measures (``extra``)."""
+
+    simulated_s: float
+    wall_s: float
+    frames: int | None = None
+    extra: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        out = {"simulated_s": self.simulated_s, "wall_s": self.wall_s}
+        if self.frames is not None:
+            out["frames"] = self.frames
+        return {**out, **self.extra}
+
+
+@dataclass
+class DrapeReport:
+    """Inputs, derived parameters, cost and quality of a drape (report.json: :meth:`to_json`).
+
+    Lengths in metres, times in seconds, as the attribute names say.
+    """
+
+    vertices: int
+    faces: int
+    resolution_m: float
+    fps: float
+    integrator: str
+    time_step_eq24_s: float
+    seam_pairs: int
+    loops: dict
+    fabrics: dict
+    body: dict
+    params: dict
+    quality: dict
+    active: dict
+    skipped: list
+    phases: dict = field(default_factory=dict)  # name → PhaseReport
+    max_triangle_stretch_dressed: float = 0.0
+    max_penetration_m_per_frame: list = field(default_factory=list)
+    max_penetration_m: float = 0.0
+    self_intersections_per_frame: list = field(default_factory=list)  # intersecting triangle pairs (none sharing a vertex)
+    wall_s: float = 0.0
+    steps: int = 0
+    cg_iterations: int = 0
+    halved_steps: dict = field(default_factory=dict)  # implicit steps taken as halves, by cause
+    body_bvh_queries: int = 0
+    max_contact_correction_m: float = 0.0  # deepest penetration any step had to undo
+    vertices_rescued_from_inside_body: int = 0
+    welded_vertices: int = 0
+    self_collision: dict = field(default_factory=dict)
+    tearing: dict | None = None
+
+    def to_json(self) -> dict:
+        """The report as report.json holds it (plain numbers, lists and dicts)."""
+        out = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "phases":
+                value = {k: p.to_json() for k, p in value.items()}
+            if value is not None:
+                out[f.name] = value
+        return out
+
+
+@dataclass
+class DrapeResult:
+    """Frames of a drape and everything needed to write them.
+
+    Attributes
+    ----------
+    frames : list of (N, 3) arrays [m]
+        Garment vertex positions, frame 0 = dressed and settled.
+    body_frames : list of (M, 3) arrays [m]
+        The body at the same instants.
+    mesh : GarmentMesh
+    weld : (N,) int
+        Index of each vertex in the welded garment (merged seam vertices share one).
+    body_faces : (F, 3) int
+        Triangles of the body frames.
+    pattern : Pattern
+    report : DrapeReport
+    topology : list of (frame, GarmentMesh, weld)
+        Where a cut or a tear changed the garment's mesh: from that frame on, frames hold the
+        vertices of that mesh (``mesh`` and ``weld`` above are frame 0's). Empty if it never changed.
+    """
+
+    frames: list
+    body_frames: list
+    mesh: object
+    weld: np.ndarray
+    body_faces: np.ndarray
+    pattern: object
+    report: DrapeReport
+    topology: list = field(default_factory=list)
+
+    def topology_at(self, frame: int):
+        """``(mesh, weld)`` of frame ``frame``."""
+        mesh, weld = self.mesh, self.weld
+        for first, m, w in self.topology:
+            if first <= frame:
+                mesh, weld = m, w
+        return mesh, weld
+
+

@@ -1,0 +1,143 @@
+"""The body over time during a drape: its pose, velocity and collider frame at any instant, and the
+step its motion allows.
+
+A moving body with a neutral pose (:attr:`~tailor.body.Body.rest`, as the shipped walk has) is
+dressed in that pose and then moves into its first frame in :data:`~.options.TRANSITION_S`
+seconds (along :data:`~.options.TRANSITION_KEYS` key poses), so panels are never placed round a
+leg in mid-stride. Each step while the body moves carries no body point that can reach the cloth
+within the frame more than half the contact margin (the feet do not shorten a T-shirt's steps).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .options import TRANSITION_KEYS, TRANSITION_S
+
+__all__ = ["Timeline", "NearBodySpeed"]
+
+
+class NearBodySpeed:
+    """The largest speed [m/s] of the body vertices that can reach the cloth within a span.
+
+    Per body vertex, its speed over each interval of the motion (looping, as :meth:`Body.at`) and,
+    with a rest ``pose``, over the transition. A body vertex can touch the cloth within ``duration``
+    only if it is nearer than the contact margin plus how far both can travel meanwhile (the cloth
+    at up to twice its fastest vertex's speed plus 1 m/s) plus the longest body edge (a triangle
+    reaches that far from its corners); the others do not limit the step.
+    """
+
+    def __init__(self, body, pose, margin: float):
+        f = np.asarray(body.frames, dtype=np.float64)
+        self.speeds = np.linalg.norm(np.roll(f, -1, axis=0) - f, axis=2) * body.fps if len(f) > 1 else None
+        self.ease = None if pose is None else np.linalg.norm(f[0] - pose, axis=1) / TRANSITION_S
+        faces = np.asarray(body.faces)
+        self.edge = float(np.linalg.norm(f[0][faces] - f[0][np.roll(faces, 1, axis=1)], axis=2).max())
+        self.fps, self.margin = body.fps, margin
+
+    def __call__(self, x, v, body_x, duration: float, span) -> float:
+        """``span`` is (start, end) in the motion's time [s], or None during the transition."""
+        if span is None:
+            speed = self.ease
+        elif self.speeds is None:
+            return 0.0
+        else:
+            k0 = int(math.floor(span[0] * self.fps + 1e-9))
+            k1 = max(k0 + 1, int(math.ceil(span[1] * self.fps - 1e-9)))
+            speed = self.speeds[np.arange(k0, k1) % len(self.speeds)].max(axis=0)
+        if speed is None or not len(x):
+            return 0.0
+        cloth = float(np.sqrt((v * v).sum(axis=1).max())) if len(v) else 0.0
+        reach = self.margin + (float(speed.max()) + 2.0 * cloth + 1.0) * duration + self.edge
+        d, _ = cKDTree(x).query(body_x, distance_upper_bound=reach)
+        near = np.isfinite(d)
+        return float(speed[near].max()) if near.any() else 0.0
+
+
+class Timeline:
+    """Where the body is at any time of a drape, and the largest step its motion allows.
+
+    Parameters
+    ----------
+    body : Body
+    still_step : float or None
+        The implicit step [s] while the body is still (None: explicit integrators keep Eq. 24's).
+    """
+
+    def __init__(self, body, still_step: float | None):
+        self.body = body
+        self.moving = body.frame_count > 1
+        has_rest = self.moving and body.rest is not None
+        self.pose = body.rest if has_rest else body.frames[0]
+        self.keys = TRANSITION_KEYS if has_rest else 0
+        self.transition_start = None  # [s] of the drape's clock, set when the body starts to move
+        self.motion_start = None
+        self.still_step = still_step
+        self.steps_used: list = []
+        self._near = None
+        self.margin = 0.0
+        self.max_speed = self._max_speed()
+
+    @property
+    def collider_frames(self) -> np.ndarray:
+        """The body frames the collider needs: the dressing pose, the transition's key poses, the motion."""
+        if not self.keys:
+            return self.body.frames
+        steps = np.arange(1, self.keys + 1)[:, None, None] / self.keys
+        pose = self.pose
+        return np.concatenate([pose[None], pose + steps * (self.body.frames[0] - pose), self.body.frames])
+
+    def follow_collider(self, margin: float) -> None:
+        """The collider's margin is known: the step rule of a moving body uses it."""
+        self.margin = margin
+        if self.moving:
+            self._near = NearBodySpeed(self.body, self.pose if self.keys else None, margin)
+
+    def at(self, t: float):
+        """Body positions, velocities and collider frame at time ``t`` of the drape."""
+        ease, start, body = self.transition_start, self.motion_start, self.body
+        if ease is None or (start is None and not self.keys):
+            return self.pose, np.zeros_like(self.pose), 0
+        if start is None:  # transition: rest pose → first frame at constant speed
+            a = min(max((t - ease) / TRANSITION_S, 0.0), 1.0)
+            return (self.pose + a * (body.frames[0] - self.pose), (body.frames[0] - self.pose) / TRANSITION_S,
+                    1 + min(self.keys - 1, int(a * self.keys)))
+        if not self.moving:
+            return self.pose, np.zeros_like(self.pose), 0
+        tb = max(0.0, t - start)
+        bx, bv = body.at(tb)
+        return bx, bv, (1 + self.keys if self.keys else 0) + int(round(tb * body.fps)) % body.frame_count
+
+    def _max_speed(self) -> float:
+        """The body's fastest vertex speed [m/s] over the motion and the transition (0: still)."""
+        if not self.moving:
+            return 0.0
+        speed = float(np.abs(np.diff(self.body.frames, axis=0)).max() * self.body.fps)
+        if self.keys:
+            speed = max(speed, float(np.abs(self.body.frames[0] - self.pose).max()) / TRANSITION_S)
+        return speed
+
+    @property
+    def motion_step(self) -> float | None:
+        """The step no body point anywhere can travel more than half the margin in (None: explicit)."""
+        if self.still_step is None or self.max_speed <= 0:
+            return self.still_step
+        return min(self.still_step, 0.5 * self.margin / self.max_speed)
+
+    def moving_step(self, state, duration: float) -> float | None:
+        """The step for the next ``duration`` s while the body moves: only body points near the cloth
+        count (a swinging hand far from a T-shirt does not shorten its steps)."""
+        if self.still_step is None:
+            return None
+        if self._near is None or self.max_speed <= 0:
+            return self.motion_step
+        bx = self.at(state.t)[0]
+        start = self.motion_start
+        span = None if start is None else (state.t - start, state.t - start + duration)
+        fastest = self._near(state.x, state.v, bx, duration, span)
+        dt = min(self.still_step, 0.5 * self.margin / fastest) if fastest > 0 else self.still_step
+        self.steps_used.append(dt)
+        return dt

@@ -1,0 +1,324 @@
+"""Linearised backward Euler (Baraff & Witkin 1998) with body contacts held inside the solve.
+
+One Newton step of (M + Δt·C + Δt²·K)·Δv = Δt·(f − Δt·K·v), solved by block-Jacobi
+preconditioned conjugate gradients on 3×3 vertex blocks (:mod:`.cg`, compiled, threaded).
+Unconditionally stable for the linear part: it takes steps many times Eq. 24's.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..collide.contacts import Contacts
+from ..errors import SimulationUnstable
+from ..forces.external import air_damping
+from ..forces.jacobian import SparsePattern, implicit_blocks
+from ..forces.membrane import face_stretch
+from ..model import State
+from .base import IntegratorBase, SolverSettings, StepResult
+from .cg import block_pcg, bsr_rows, inverse_3x3
+
+__all__ = ["ImplicitEuler"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(slots=True)
+class _Held:
+    """The working set of held contacts of one step."""
+
+    ids: np.ndarray
+    normals: np.ndarray
+    target: np.ndarray  # (K, 3) velocity each must end with along its held directions
+    stick: np.ndarray
+    friction: np.ndarray
+
+    @classmethod
+    def empty(cls):
+        return cls(np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.uint8), np.zeros(0))
+
+    @classmethod
+    def of(cls, c: Contacts, keep):
+        k = int(keep.sum())
+        n = np.asarray(c.normals, float)[keep]
+        stick = np.zeros(k, np.uint8) if c.stick is None else np.asarray(c.stick, np.uint8)[keep]
+        vb = np.zeros((k, 3)) if c.body_velocity is None else np.asarray(c.body_velocity, float)[keep]
+        # the target's normal part is the prescribed normal velocity; its tangent part the body's
+        vn = np.asarray(c.normal_velocity, float)[keep]
+        target = vb + (vn - np.einsum("ij,ij->i", vb, n))[:, None] * n
+        mu = np.full(k, np.inf) if c.friction is None else np.asarray(c.friction, float)[keep]
+        return cls(np.ascontiguousarray(c.ids[keep], dtype=np.intp), np.ascontiguousarray(n), target, stick, mu)
+
+    @classmethod
+    def given(cls, contacts: Contacts | None, model):
+        """The contacts to hold this step: valid for this model, not pinned."""
+        if contacts is None or not contacts.valid_for(model):
+            return cls.empty()
+        return cls.of(contacts, ~model.vertex_pinned[contacts.ids])
+
+    def __len__(self):
+        return len(self.ids)
+
+    def take(self, sel):
+        return _Held(self.ids[sel], self.normals[sel], self.target[sel], self.stick[sel], self.friction[sel])
+
+    def join(self, other):
+        return _Held(*(np.concatenate([a, b]) for a, b in ((self.ids, other.ids), (self.normals, other.normals),
+                                                          (self.target, other.target), (self.stick, other.stick),
+                                                          (self.friction, other.friction))))
+
+
+@dataclass(slots=True)
+class _System:
+    """A step's linear system A·Δv = rhs in 3×3 block-CSR form, with its preconditioner."""
+
+    bptr: np.ndarray
+    bcol: np.ndarray
+    blocks: np.ndarray
+    pinv: np.ndarray
+    rhs: np.ndarray
+    free: np.ndarray  # (3N,) dofs not pinned
+
+    def reactions(self, dv, held: _Held):
+        """(K, 3) impulse [N·s] the held contacts exert: the residual A·Δv − b at their dofs."""
+        if not len(held):
+            return np.zeros((0, 3))
+        out = np.empty((len(held), 3))
+        bsr_rows(self.bptr, self.bcol, self.blocks, dv, held.ids, out)
+        return out - self.rhs.reshape(-1, 3)[held.ids]
+
+
+class ImplicitEuler(IntegratorBase):
+    """Linearised backward Euler with a PSD Jacobian and block-Jacobi preconditioned CG.
+
+    Parameters
+    ----------
+    tolerance : float
+        Relative residual at which CG stops.
+    max_iterations : int
+        Of one CG solve; a stiff fabric on a fine mesh needs 500–2 000 at 1e-5.
+    max_halvings : int
+        A step whose CG does not converge within ``max_iterations`` is taken as two half steps
+        (M + Δt²K is better conditioned the smaller Δt is), at most this many times over.
+    max_stretch_change : float
+        A step that would stretch any triangle by more than this (principal stretch, above the
+        larger of its start and rest) is also taken as two half steps, up to ``max_halvings``
+        deep (Baraff & Witkin 1998's adaptive step size). One linearised step rotates an edge
+        about a held neighbour along the tangent, lengthening it by √(1 + θ²) for a rotation
+        θ = |Δv|·Δt / length; halving the step quarters that.
+
+    Contacts
+    --------
+    ``contacts`` given to :meth:`step` are held by the solve itself (filtered CG): the cloth's
+    stiffness then knows about the support within the step, instead of the support being
+    imposed after a step that ignored it. Contacts the body would have to pull on are let go,
+    stuck ones pulled harder than friction allows slide at the Coulomb limit (friction inside
+    the solve, so the neighbours feel it), and ``predict`` adds the vertices the solved step
+    would bring onto the body; the step is solved again, at most :attr:`contact_passes` times.
+    """
+
+    name = "implicit"
+    explicit = False
+
+    def __init__(self, tolerance: float = 1e-5, max_iterations: int = 2000, max_halvings: int = 3,
+                 max_stretch_change: float = 0.3):
+        super().__init__()
+        self.max_iterations = max_iterations
+        self.max_halvings = max_halvings
+        self.contact_passes = 4
+        self.settings = SolverSettings(tolerance, max_stretch_change, None)
+        self._pattern = None
+        self._pattern_model = None
+        self._warm = None
+
+    def reset(self) -> None:
+        """Forget the warm start (the next solve starts from the explicit estimate)."""
+        self._warm = None
+
+    def _pattern_for(self, model):
+        # the sparsity depends only on the topology arrays: copies of a model that share them
+        # (other pair stiffnesses, pins) reuse it; the key holds the arrays, so their ids stay theirs
+        arrays = (model.faces, model.hinge_vertices, model.pair_vertices)
+        key = (tuple(id(a) for a in arrays), model.has_bending, model.elastic, arrays)
+        if self._pattern_model is None or self._pattern_model[:3] != key[:3]:
+            self._pattern = SparsePattern(model)
+            self._pattern_model = key
+            self._warm = None
+        return self._pattern
+
+    def _system(self, model, state, dt, f):
+        """Assemble (M + Δt·C + Δt²·K) and Δt·(f − Δt·K·v), pinned rows the identity."""
+        pattern = self._pattern_for(model)
+        blocks, kv = implicit_blocks(model, state, pattern, dt)
+        free = np.repeat(~model.vertex_pinned, 3)
+        rhs = dt * (f - dt * kv.reshape(-1))
+        diagonal = pattern.diagonal_block_index
+        for a in range(3):
+            blocks[diagonal, a, a] += model.vertex_mass
+        if not free.all():  # pinned vertices: Δv = 0 (their block rows and columns become the identity)
+            pinned = model.vertex_pinned
+            blocks[pinned[pattern.block_rows] | pinned[pattern.block_cols]] = 0.0
+            blocks[diagonal[pinned]] = np.eye(3)
+            rhs[~free] = 0.0
+        if model.air_density > 0.0:  # air drag and wind, implicitly (lumped on the diagonal blocks)
+            drag = air_damping(model, state, self.settings.wind)
+            drag[model.vertex_pinned] = 0.0
+            pattern.add_to_diagonal(blocks, dt * drag)
+        pinv = inverse_3x3(pattern.diagonal_blocks(blocks))
+        return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free)
+
+    def _solve(self, system: _System, dv, v, held: _Held):
+        """CG on A·Δv = rhs in place, holding the contacts' velocities; (iterations, converged)."""
+        ids, n = held.ids, held.normals
+        if len(ids):
+            dvk = dv.reshape(-1, 3)[ids]
+            end = v.reshape(-1, 3)[ids] + dvk
+            normal_fix = np.einsum("ij,ij->i", held.target - end, n)[:, None] * n
+            dvk += np.where(held.stick[:, None] > 0, held.target - end, normal_fix)
+            dv.reshape(-1, 3)[ids] = dvk
+        return block_pcg(system.bptr, system.bcol, system.blocks, system.rhs, dv, system.pinv, self.settings.tolerance,
+                         self.max_iterations, ids, n, held.stick)
+
+    def _release_pulled(self, system, dv, v, held, let_go):
+        """Let go the held contacts the body would have to pull on and solve again.
+
+        Returns (held, let_go, reactions, normal reactions, iterations, converged)."""
+        r = system.reactions(dv, held)
+        rn = np.einsum("ij,ij->i", r, held.normals)
+        pulled = rn < 0.0
+        if not pulled.any():
+            return held, let_go, r, rn, 0, True
+        # the cloth leaves the body here: solve again before judging friction
+        let_go = np.concatenate([let_go, held.ids[pulled]])
+        held = held.take(~pulled)
+        self.counters.released += int(pulled.sum())
+        iterations, converged = self._solve(system, dv, v, held)
+        if not converged:
+            return held, let_go, r, rn, iterations, False
+        r = system.reactions(dv, held)
+        return held, let_go, r, np.einsum("ij,ij->i", r, held.normals), iterations, True
+
+    def _slip(self, system, held, r, rn) -> bool:
+        """Stuck contacts whose reaction leaves the Coulomb cone slide, keeping the friction they
+        had at its limit (kinetic friction inside the solve); whether any did."""
+        rn = np.maximum(rn, 0.0)  # a contact the new solve pulls on is let go next pass
+        tangential = np.linalg.norm(r - rn[:, None] * held.normals, axis=1)
+        limit = np.zeros_like(rn)  # μ may be inf (no sliding): never multiplied by rn = 0
+        pressed = rn > 0.0
+        limit[pressed] = held.friction[pressed] * rn[pressed]
+        slip = (held.stick > 0) & (tangential > limit)
+        if not slip.any():
+            return False
+        # a tangential reaction of round-off size has no direction to drag in
+        rt = r - rn[:, None] * held.normals
+        drag = np.where(tangential > 1e-12 * (rn + 1e-30), limit / np.maximum(tangential, 1e-300), 0.0)
+        drag = drag[slip, None] * rt[slip]
+        np.add.at(system.rhs.reshape(-1, 3), held.ids[slip], drag)
+        held.stick[slip] = 0
+        self.counters.slipped += int(slip.sum())
+        return True
+
+    def _landing(self, model, state, dt, dv, held, let_go, predict):
+        """``held`` with the contacts the solved step would make (not ones let go this step: released
+        for a pull, then predicted to land as its neighbours settle, it would cycle)."""
+        n = model.vertex_count
+        v1 = state.v + dv.reshape(n, 3)
+        more = predict(model, state, state.x + dt * v1, v1, dt, held.ids)
+        if more is None or not len(more.ids):
+            return held, False
+        new = ~np.isin(more.ids, held.ids) & ~np.isin(more.ids, let_go) & ~model.vertex_pinned[more.ids]
+        if not new.any():
+            return held, False
+        self.counters.predicted += int(new.sum())
+        return held.join(_Held.of(more, new)), True
+
+    def _active_set(self, model, state, dt, system, dv, held, predict):
+        """A few passes at most: release pulled contacts, slide slipping ones, hold landing ones,
+        solving again after each change. Returns (held, iterations, converged)."""
+        v = state.v.reshape(-1)
+        let_go = np.zeros(0, np.intp)
+        iterations, converged = 0, True
+        for _ in range(self.contact_passes):
+            changed = False
+            if len(held):
+                held, let_go, r, rn, extra, converged = self._release_pulled(system, dv, v, held, let_go)
+                iterations += extra
+                if not converged:
+                    break
+                changed = self._slip(system, held, r, rn)
+            if predict is not None:
+                held, landed = self._landing(model, state, dt, dv, held, let_go, predict)
+                changed = changed or landed
+            if not changed:
+                break
+            extra, converged = self._solve(system, dv, v, held)
+            iterations += extra
+        return held, iterations, converged
+
+    def _halves(self, model, state, dt, forces, contacts, predict, depth):
+        """The step taken as two half steps, each holding the contacts this one was given."""
+        self._warm = None
+        half = self._step(model, state, 0.5 * dt, forces, contacts, predict, depth + 1)
+        return self._step(model, half.state, 0.5 * dt, forces, contacts, predict, depth + 1)
+
+    def _overstretches(self, model, state, x_end) -> bool:
+        """Whether ending at ``x_end`` stretches a triangle more than ``max_stretch_change`` this step."""
+        if not model.face_count:
+            return False
+        end = face_stretch(model, x_end)
+        change = self.settings.max_stretch_change
+        if end.max(initial=1.0) <= 1.0 + change:  # the common case: no triangle near it, no start needed
+            return False
+        return bool((end - np.maximum(face_stretch(model, state.x), 1.0)).max() > change)
+
+    def step(self, model, state, dt, forces, *, contacts=None, predict=None) -> StepResult:
+        """One step of ``dt`` holding ``contacts`` (and those ``predict`` adds) within the solve."""
+        self.counters.steps += 1
+        return self._step(model, state, dt, forces, contacts, predict, 0)
+
+    def _step(self, model, state, dt, forces, contacts, predict, depth) -> StepResult:
+        n = model.vertex_count
+        f = forces(model, state).reshape(-1)
+        system = self._system(model, state, dt, f)
+        # warm start: last step's Δv, or the explicit Euler estimate Δt·f/m on the first step
+        if self._warm is not None and len(self._warm) == 3 * n:
+            dv = self._warm.copy()
+        else:
+            dv = dt * f / np.repeat(model.vertex_mass, 3) * system.free
+        held = _Held.given(contacts, model)
+        iterations, converged = self._solve(system, dv, state.v.reshape(-1), held)
+        if converged:
+            held, extra, converged = self._active_set(model, state, dt, system, dv, held, predict)
+            iterations += extra
+        self.counters.iterations += iterations
+        self.counters.solves += 1
+        if not converged and iterations >= self.max_iterations and depth < self.max_halvings and np.all(np.isfinite(dv)):
+            self.counters.halvings += 1
+            return self._halves(model, state, dt, forces, contacts, predict, depth)
+        self._check(state, dt, dv, converged, iterations)
+        dv[~system.free] = 0.0
+        x_end = state.x + dt * (state.v + dv.reshape(n, 3))
+        if depth < self.max_halvings and self._overstretches(model, state, x_end):
+            self.counters.stretch_halvings += 1
+            return self._halves(model, state, dt, forces, contacts, predict, depth)
+        self._warm = dv
+        impulses = None
+        if len(held):
+            impulses = np.zeros(n)
+            impulses[held.ids] = np.einsum("ij,ij->i", system.reactions(dv, held), held.normals)
+        v1 = state.v + dv.reshape(n, 3)
+        return StepResult(State(state.x + dt * v1, v1, state.t + dt), impulses, iterations)
+
+    def _check(self, state, dt, dv, converged, iterations) -> None:
+        """Warn of an unconverged solve; raise on a non-finite or indefinite one."""
+        if not converged:
+            log.warning("implicit step at t = %.4f s: CG stopped after %d iterations before reaching %.0e", state.t,
+                        iterations, self.settings.tolerance)
+        if not np.all(np.isfinite(dv)) or (not converged and iterations < self.max_iterations):
+            raise SimulationUnstable(
+                f"implicit solve failed at t = {state.t:.4f} s (Δt = {dt:.3g} s): the system is not positive definite; "
+                f"try a smaller time step"
+            )

@@ -1,0 +1,66 @@
+"""The one contact pipeline (`tailor/contact.py`): what each phase setting does, and that a
+renumbered cloth is followed."""
+
+import numpy as np
+import pytest
+
+from tailor.collide import BodyCollider
+from tailor.contact import Attachments, ContactPipeline, ContactSettings, StaticBody, body_margin
+from tailor.errors import SimulationError
+from tailor.scenes import cloth_model, floor, rectangle
+
+THICKNESS = 0.002
+
+
+def _resting(speed=(0.0, 0.0, 0.0)):
+    """A 20 cm cloth lying on the floor a little inside it, moving at ``speed``, and its pipeline."""
+    _, model = cloth_model([rectangle(0.2, 0.2)], "cotton", 0.05)
+    x = np.c_[model.rest_uv - 0.1, np.full(model.vertex_count, 0.5 * THICKNESS)]
+    state = model.state(x, np.tile(speed, (model.vertex_count, 1)).astype(float))
+    bv, bf = floor()
+    pipe = ContactPipeline(BodyCollider(bv[None], bf, margin=body_margin(THICKNESS)), StaticBody(bv),
+                           thickness=THICKNESS, friction=0.5)
+    return model, state, pipe
+
+
+def test_held_contacts_are_handed_on_only_when_the_phase_holds_them():
+    model, state, pipe = _resting((0.0, 0.0, -0.1))
+    pipe.respond(model, state, 0.01)
+    held = pipe.hold(model)
+    assert held is not None and held.valid_for(model) and len(held) == model.vertex_count
+    assert np.allclose(state.x[:, 2], THICKNESS) and np.all(state.v[:, 2] >= 0)  # pushed out, approach cancelled
+    model, state, pipe = _resting((0.0, 0.0, -0.1))
+    pipe.configure(ContactSettings(hold=False))
+    pipe.respond(model, state, 0.01)
+    assert pipe.hold(model) is None
+    assert pipe.predict(model, state, state.x, state.v, 0.01, np.zeros(0, int)) is None
+
+
+@pytest.mark.parametrize(("scale", "slides"), [(0.0, True), (1.0, False)])
+def test_the_friction_scale_of_a_phase_lets_the_cloth_slide_or_holds_it(scale, slides):
+    model, state, pipe = _resting((0.05, 0.0, -0.2))  # pressed into the floor while sliding at 5 cm/s
+    pipe.configure(ContactSettings(friction_scale=scale))
+    pipe.respond(model, state, 0.01)
+    # Eq. 14: μ·Δv_n = 0.5 · 0.2 m/s exceeds the 5 cm/s of sliding, which stops; without friction it goes on
+    assert np.allclose(state.v[:, 0], 0.05 if slides else 0.0)
+
+
+def test_forgetting_a_renumbered_cloth_drops_the_contacts_it_held():
+    model, state, pipe = _resting((0.0, 0.0, -0.1))
+    pipe.respond(model, state, 0.01)
+    assert pipe.hold(model) is not None
+    pipe.forget()
+    assert pipe.hold(model) is None
+
+
+def test_an_unknown_self_collision_mode_is_one_line():
+    with pytest.raises(SimulationError, match="self_collision must be one of"):
+        ContactPipeline(None, None, thickness=THICKNESS, friction=0.4, self_collision="sometimes")
+
+
+def test_attachments_follow_a_renumbering_and_drop_removed_vertices():
+    a = Attachments(np.array([0, 3, 5]), np.array([0, 1, 0]), np.full((3, 3), 1 / 3), np.full(3, 0.002),
+                    np.array([[0, 1, 2], [1, 2, 3]]))
+    inverse = np.array([0, 1, 2, -1, 3, 7])  # vertex 3 was cut away, 5 became 7
+    b = a.renumbered(inverse)
+    assert b.ids.tolist() == [0, 7] and b.tri.tolist() == [0, 0]

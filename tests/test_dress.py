@@ -1,0 +1,121 @@
+"""The dressing driver (`tailor/dress/`): options checked once, each phase alone on a small scene,
+every integrator through cuts and tearing."""
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tailor import read_body, read_pattern
+from tailor.cli import main
+from tailor.dress import DrapeOptions, drape, prepare
+from tailor.dress.phases import animate, settle, sew, transition
+from tailor.errors import SimulationError
+from tailor.integrators import INTEGRATORS
+from tailor.tearing import Cut
+
+PANELS = Path(__file__).resolve().parents[1] / "panels"
+HOLE = (0.0, -0.15, 0.75)  # on the skirt's front, in the body's frame [m]
+
+
+@pytest.mark.parametrize(("field", "value"), [("frames", 0), ("frames", 2.5), ("fps", -25.0), ("resolution", float("nan")),
+                                              ("sew_timeout", 0.0), ("settle", -1.0), ("integrator", "euler"),
+                                              ("self_collision", "maybe"), ("quality", "best"), ("cuts", ("here",))])
+def test_options_are_checked_once_with_a_one_line_error_naming_the_field(field, value):
+    with pytest.raises(SimulationError) as err:
+        DrapeOptions(**{field: value})
+    assert field in str(err.value) and "\n" not in str(err.value)
+
+
+def test_frames_0_on_the_command_line_exits_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["drape", str(PANELS / "skirt.json"), "--frames", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "frames" in err[0] and not out.exists()
+
+
+@pytest.fixture(scope="module")
+def skirt_dressing(mannequin):
+    """A skirt at 8 cm placed round the mannequin, ready to sew."""
+    pattern = read_pattern(PANELS / "skirt.json")
+    return pattern, prepare(pattern, mannequin, DrapeOptions(resolution=0.08, frames=2, settle=0.2))
+
+
+@pytest.fixture(scope="module")
+def sewn(skirt_dressing):
+    pattern, (d, _, x0) = skirt_dressing
+    return sew(d, x0)
+
+
+@pytest.fixture(scope="module")
+def settled(skirt_dressing, sewn):
+    pattern, (d, _, _) = skirt_dressing
+    return sewn[0].x.copy(), settle(d, sewn[0])
+
+
+def test_sewing_alone_closes_every_seam_and_welds(skirt_dressing, sewn):
+    pattern, (d, _, x0) = skirt_dressing
+    state, report = sewn
+    g = d.garment
+    assert g.sewing.open_count == 0 and g.model.vertex_count < g.mesh.vertex_count
+    assert report.simulated_s < d.options.sew_timeout and report.extra["max_gap_at_merge_m"] <= 0.6 * 0.08
+    assert np.isfinite(state.x).all()
+
+
+def test_settling_alone_hangs_the_sewn_garment_under_gravity(skirt_dressing, settled):
+    pattern, (d, _, _) = skirt_dressing
+    before, (state, report) = settled
+    g = d.garment
+    assert g.model.gravity[2] < 0 and d.contacts.settings.hold and d.contacts.settings.friction_scale == 1.0
+    assert report.simulated_s == pytest.approx(0.2)
+    # held up by the hips: it has not fallen as a free body would (½·g·t² = 20 cm, g·t = 2 m/s)
+    assert abs(np.mean(state.v[:, 2])) < 0.2 and np.mean(before[:, 2] - state.x[:, 2]) < 0.05
+    assert d.motion_limit >= 5.0
+
+
+def test_transition_and_motion_alone_on_a_still_body(skirt_dressing, settled):
+    pattern, (d, _, _) = skirt_dressing
+    state, report = transition(d, settled[1][0])
+    assert report is None  # a still body has no transition
+    state, motion, penetration, crossings = animate(d, state)
+    assert len(d.frames) == 2 and motion.frames == 2
+    assert max(penetration) <= 0.002 and len(crossings) == 2
+
+
+def test_a_walking_body_is_eased_from_its_rest_pose_into_its_first_frame():
+    body = read_body("mannequin-walk")
+    pattern = read_pattern(PANELS / "skirt.json")
+    d, _, _ = prepare(pattern, body, DrapeOptions(resolution=0.08))
+    tl = d.timeline
+    assert tl.keys and np.array_equal(tl.at(0.0)[0], body.rest)  # dressed in the rest pose
+    tl.transition_start = 1.0
+    assert np.allclose(tl.at(1.5)[0], 0.5 * (body.rest + body.frames[0]))
+    tl.motion_start = 2.0
+    x, v, k = tl.at(2.0)
+    assert np.allclose(x, body.frames[0]) and k == tl.keys + 1  # collider frame of the motion's first pose
+    assert len(tl.collider_frames) == 1 + tl.keys + body.frame_count
+
+
+@pytest.mark.parametrize("integrator", sorted(INTEGRATORS))
+def test_every_integrator_survives_cuts_and_tearing_on_a_garment(integrator, mannequin):
+    """A hole is cut in a sewn skirt of a weak fabric, which may then tear on: the mesh changes under
+    every integrator (the integrator forgets its history, the contacts their per-vertex memory)."""
+    pattern = read_pattern(PANELS / "skirt.json")
+    weak = dataclasses.replace(pattern.fabric, tear_strain=0.04)
+    result = drape(pattern, mannequin, weak, integrator=integrator, resolution=0.08, frames=3, settle=0.2, tear=True,
+                   cuts=[Cut(0.04, (HOLE,), 0.05)])
+    assert result.topology and all(np.isfinite(f).all() for f in result.frames)
+    mesh, weld = result.topology_at(2)
+    assert result.frames[2].shape == (mesh.vertex_count, 3) and mesh.face_count < result.mesh.face_count
+    assert result.report.max_penetration_m <= 0.002
+
+
+def test_the_issue_command_symplectic_with_cuts_completes(tmp_path):
+    cuts = tmp_path / "cuts.json"
+    cuts.write_text(json.dumps({"cuts": [{"time": 0.04, "points": [[100 * c for c in HOLE]], "radius": 5}]}))
+    out = tmp_path / "run"
+    assert main(["-q", "drape", str(PANELS / "skirt.json"), "--integrator", "symplectic", "--resolution", "8",
+                 "--frames", "3", "--cuts", str(cuts), "--out", str(out)]) == 0
+    assert len(list(out.glob("*.obj"))) == 3
