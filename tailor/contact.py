@@ -192,8 +192,9 @@ class ContactPipeline:
         return self.body.landing(model, x_end, v_end, dt, bx, bv, k, thickness=self.thickness, skip=held)
 
     def hold(self, model) -> Contacts | None:
-        """The body contacts the next step should hold (those the last response left resting)."""
-        return self.pending
+        """The body contacts the next step on ``model`` should hold (those the last response left resting)."""
+        p = self.pending
+        return p if p is not None and p.vertex_count == model.vertex_count else None
 
     def respond(self, model, state, dt: float, impulses=None) -> None:
         """Every contact of ``state`` after a step, in place; ``impulses`` the step's held-contact impulses."""

@@ -1,11 +1,14 @@
-"""Body contact helpers: trapped vertices go back out."""
+"""Body contact (`tailor/collide/`): trapped vertices go back out, the closest point and the broad phase are
+exact, and friction switches at tan θ = μ (Carignan Eq. 14)."""
 
 import numpy as np
 import pytest
 import trimesh
 
 from conftest import sheet
+from tailor.body import Body
 from tailor.collide import BodyCollider
+from tailor.units import GRAVITY
 
 
 def test_vertices_trapped_deep_inside_are_returned_to_the_surface():
@@ -113,3 +116,41 @@ def test_points_are_clustered_by_cube_in_lexicographic_order(scale):
     assert all(tuple(a) < tuple(b) for a, b in zip(first[:-1], first[1:]))  # distinct, in order
     assert np.array_equal(lo, np.minimum.reduceat(points[order], ptr[:-1])) and np.all(hi >= lo)
     assert all(np.array_equal(order[s:e], np.sort(order[s:e])) for s, e in zip(ptr[:-1], ptr[1:]))  # stable
+
+
+def _incline(angle):
+    """A 3 m × 3 m plane through the origin tilted by ``angle`` about x, as a body."""
+    c, s = np.cos(angle), np.sin(angle)
+    pts = np.array([[-1.5, -1.5, 0.0], [1.5, -1.5, 0.0], [1.5, 1.5, 0.0], [-1.5, 1.5, 0.0]])
+    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    return Body((pts @ rot.T)[None], np.array([[0, 1, 2], [0, 2, 3]]))
+
+
+@pytest.mark.parametrize("ratio,slides", [(0.85, False), (1.15, True)])
+def test_cloth_on_an_incline_slides_exactly_when_tan_theta_exceeds_mu(ratio, slides):
+    mu = 0.4
+    angle = np.arctan(ratio * mu)
+    model, x0 = sheet(10, 10, 0.05, "cotton", vertical=False, air_density=0.0)
+    c, s = np.cos(angle), np.sin(angle)
+    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    thickness = 0.003
+    x = (x0 - [0.05, 0.05, 0.0] + [0.0, 0.0, thickness]) @ rot.T
+    body = _incline(angle)
+    collider = BodyCollider(body.frames, body.faces, margin=0.02)
+    state = model.state(x)
+    from tailor.forces import total_forces
+    from tailor.integrators import make_integrator
+
+    integ = make_integrator("symplectic")
+    dt = model.time_step
+    for _ in range(int(round(0.5 / dt))):
+        state = integ.step(model, state, dt, total_forces).state
+        collider.respond(model, state, dt, body.frames[0], np.zeros_like(body.frames[0]), 0,
+                         thickness=thickness, friction=mu)
+    down_slope = np.array([0.0, -c, -s])
+    travel = float(((state.x - x) @ down_slope).mean())
+    if slides:  # (sin θ − μ cos θ)·g·t²/2 after 0.5 s
+        expected = 0.5 * GRAVITY * (np.sin(angle) - mu * np.cos(angle)) * 0.5**2
+        assert travel == pytest.approx(expected, rel=0.1)
+    else:
+        assert abs(travel) < 1e-4

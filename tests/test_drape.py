@@ -1,12 +1,11 @@
-"""Dressing: merging conserves momentum, friction switches at tan θ = μ, a skirt dresses and walks."""
+"""Dressing whole garments: a skirt, a T-shirt, trousers and GarmentCode's patterns sew, drape and walk."""
 
 import json
 
 import numpy as np
 import pytest
 
-from conftest import PANELS, sheet
-from tailor.body import Body
+from conftest import PANELS
 from tailor.cli import main
 from tailor.collide import BodyCollider, self_intersections
 from tailor.dress import DRAPE_RESOLUTION, drape
@@ -15,63 +14,6 @@ from tailor.io import read_pattern
 from tailor.io.body_files import read_body
 from tailor.io.garment import write_drape
 from tailor.measure import find_landmarks
-from tailor.seams import Sewing, merge_state
-from tailor.units import GRAVITY
-
-
-def test_merging_conserves_linear_momentum_and_mass_exactly():
-    rng = np.random.default_rng(4)
-    n = 50
-    x, v, m = rng.normal(size=(n, 3)), rng.normal(size=(n, 3)), rng.uniform(0.1, 2.0, n)
-    sewing = Sewing(np.array([[0, 1], [1, 2], [10, 20], [30, 30]]))  # a chain, a pair, a self-pair
-    assert len(sewing.pairs) == 3
-    sewing.merged[:] = True
-    weld = sewing.weld_map(n)
-    assert weld[0] == weld[1] == weld[2] and weld[10] == weld[20] and len(np.unique(weld)) == n - 3
-    xw, vw = merge_state(x, v, m, weld)
-    mw = np.bincount(weld, m)
-    assert mw.sum() == pytest.approx(m.sum(), rel=1e-15)
-    assert np.allclose((mw[:, None] * vw).sum(axis=0), (m[:, None] * v).sum(axis=0), rtol=0, atol=1e-12)
-    # Eq. 18: r_m = r1 + (r2 − r1)·m2/(m1 + m2) for a single pair
-    assert np.allclose(xw[weld[10]], x[10] + (x[20] - x[10]) * m[20] / (m[10] + m[20]))
-
-
-def _incline(angle):
-    """A 3 m × 3 m plane through the origin tilted by ``angle`` about x, as a body."""
-    c, s = np.cos(angle), np.sin(angle)
-    pts = np.array([[-1.5, -1.5, 0.0], [1.5, -1.5, 0.0], [1.5, 1.5, 0.0], [-1.5, 1.5, 0.0]])
-    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
-    return Body((pts @ rot.T)[None], np.array([[0, 1, 2], [0, 2, 3]]))
-
-
-@pytest.mark.parametrize("ratio,slides", [(0.85, False), (1.15, True)])
-def test_cloth_on_an_incline_slides_exactly_when_tan_theta_exceeds_mu(ratio, slides):
-    mu = 0.4
-    angle = np.arctan(ratio * mu)
-    model, x0 = sheet(10, 10, 0.05, "cotton", vertical=False, air_density=0.0)
-    c, s = np.cos(angle), np.sin(angle)
-    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
-    thickness = 0.003
-    x = (x0 - [0.05, 0.05, 0.0] + [0.0, 0.0, thickness]) @ rot.T
-    body = _incline(angle)
-    collider = BodyCollider(body.frames, body.faces, margin=0.02)
-    state = model.state(x)
-    from tailor.forces import total_forces
-    from tailor.integrators import make_integrator
-
-    integ = make_integrator("symplectic")
-    dt = model.time_step
-    for _ in range(int(round(0.5 / dt))):
-        state = integ.step(model, state, dt, total_forces).state
-        collider.respond(model, state, dt, body.frames[0], np.zeros_like(body.frames[0]), 0,
-                         thickness=thickness, friction=mu)
-    down_slope = np.array([0.0, -c, -s])
-    travel = float(((state.x - x) @ down_slope).mean())
-    if slides:  # (sin θ − μ cos θ)·g·t²/2 after 0.5 s
-        expected = 0.5 * GRAVITY * (np.sin(angle) - mu * np.cos(angle)) * 0.5**2
-        assert travel == pytest.approx(expected, rel=0.1)
-    else:
-        assert abs(travel) < 1e-4
 
 
 @pytest.fixture(scope="module")
@@ -175,36 +117,6 @@ def test_cli_drape_refuses_bad_input_and_leaves_no_output(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert "seam vertex pairs are still open" in err and not out.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")]
-
-
-def test_stiff_pair_springs_close_a_gap_stably_under_the_implicit_solver():
-    from tailor.forces import pair_forces
-    from tailor.forces.jacobian import SparsePattern, force_jacobians
-    from tailor.integrators import SolverSettings, make_integrator
-    from tailor.forces import total_forces
-
-    model, x0 = sheet(20, 10, 0.05, "cotton", vertical=False, gravity=(0, 0, 0))
-    left = np.flatnonzero(x0[:, 0] < 1e-9)
-    right = np.flatnonzero(x0[:, 0] > 0.2 - 1e-9)
-    pairs = np.column_stack([left[np.argsort(x0[left, 1])], right[np.argsort(x0[right, 1])]])  # a tube's seam
-    m = model.vertex_mass[pairs].mean(axis=1)
-    stiff = model.with_pairs(pairs, 1e5 * m, 2.0 * np.sqrt(1e5) * m)  # ω·Δt ≈ 3: explicit would explode
-    state = stiff.state(x0)
-    f = pair_forces(stiff, state)
-    assert np.abs(f.sum(axis=0)).max() < 1e-12  # internal: momentum conserved
-    k_all = force_jacobians(stiff, state, SparsePattern(stiff))[0].toarray()
-    k_cloth = force_jacobians(model, model.state(x0), SparsePattern(model))[0].toarray()
-    dx = np.random.default_rng(0).normal(0, 1e-4, x0.shape)
-    moved = stiff.state(x0 + dx)
-    predicted = -((k_all - k_cloth) @ dx.reshape(-1)).reshape(-1, 3)
-    assert np.allclose(pair_forces(stiff, moved) - f, predicted, atol=1e-9)  # linear springs: K is exact
-    integ = make_integrator("implicit")
-    integ.configure(SolverSettings(max_stretch_change=np.inf))  # as drape sews: the seams' pull stretches the seam triangles by design
-    gaps = []
-    for _ in range(30):
-        state = integ.step(stiff, state, 0.01, total_forces).state
-        gaps.append(np.linalg.norm(state.x[pairs[:, 0]] - state.x[pairs[:, 1]], axis=1).max())
-    assert np.isfinite(state.x).all() and gaps[-1] < 0.01 * 0.2 and gaps[-1] <= gaps[0]
 
 
 def test_tshirt_sews_and_follows_the_walk():
@@ -318,24 +230,6 @@ def test_library_and_command_line_drape_share_their_defaults():
     for f in dataclasses.fields(DrapeOptions):
         if f.name in vars(args) and f.name not in ("resolution", "cuts", "wind"):
             assert getattr(args, f.name) == f.default, f.name
-
-
-def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
-    from tailor.dress.timeline import NearBodySpeed as _NearBodySpeed
-
-    # two boxes: a still one near the cloth and one 1 m away moving at 2 m/s
-    still = np.array([[x, y, z] for x in (0.0, 0.1) for y in (0.0, 0.1) for z in (0.0, 0.1)])
-    frames = np.stack([np.concatenate([still, still + [1.0 + 0.08 * k, 0.0, 0.0]]) for k in range(3)])
-    cube = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                     [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-    body = Body(frames, np.concatenate([cube, cube + 8]), fps=25.0)
-    speed = _NearBodySpeed(body, None, 0.03)
-    cloth = np.array([[0.05, 0.05, 0.12], [0.06, 0.05, 0.12]])
-    at_rest = np.zeros_like(cloth)
-    assert speed(cloth, at_rest, frames[0], 0.04, (0.0, 0.04)) == 0.0  # the moving box is out of reach
-    assert speed(cloth + [1.0, 0.0, 0.0], at_rest, frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)
-    assert speed(cloth, np.full_like(cloth, 30.0), frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)  # fast cloth
-
 
 
 def test_an_explicit_integrator_follows_the_walking_body():

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from tailor import read_body, read_pattern
+from tailor.body import Body
 from tailor.cli import main
 from tailor.dress import DrapeOptions, drape, prepare
 from tailor.dress.phases import animate, settle, sew, transition
@@ -90,9 +91,9 @@ def test_a_walking_body_is_eased_from_its_rest_pose_into_its_first_frame():
     d, _, _ = prepare(pattern, body, DrapeOptions(resolution=0.08))
     tl = d.timeline
     assert tl.keys and np.array_equal(tl.at(0.0)[0], body.rest)  # dressed in the rest pose
-    tl.transition_start = 1.0
+    tl.start_transition(1.0)
     assert np.allclose(tl.at(1.5)[0], 0.5 * (body.rest + body.frames[0]))
-    tl.motion_start = 2.0
+    tl.start_motion(2.0)
     x, v, k = tl.at(2.0)
     assert np.allclose(x, body.frames[0]) and k == tl.keys + 1  # collider frame of the motion's first pose
     assert len(tl.collider_frames) == 1 + tl.keys + body.frame_count
@@ -119,3 +120,20 @@ def test_the_issue_command_symplectic_with_cuts_completes(tmp_path):
     assert main(["-q", "drape", str(PANELS / "skirt.json"), "--integrator", "symplectic", "--resolution", "8",
                  "--frames", "3", "--cuts", str(cuts), "--out", str(out)]) == 0
     assert len(list(out.glob("*.obj"))) == 3
+
+
+def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
+    from tailor.dress.timeline import NearBodySpeed as _NearBodySpeed
+
+    # two boxes: a still one near the cloth and one 1 m away moving at 2 m/s
+    still = np.array([[x, y, z] for x in (0.0, 0.1) for y in (0.0, 0.1) for z in (0.0, 0.1)])
+    frames = np.stack([np.concatenate([still, still + [1.0 + 0.08 * k, 0.0, 0.0]]) for k in range(3)])
+    cube = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                     [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    body = Body(frames, np.concatenate([cube, cube + 8]), fps=25.0)
+    speed = _NearBodySpeed(body, None, 0.03)
+    cloth = np.array([[0.05, 0.05, 0.12], [0.06, 0.05, 0.12]])
+    at_rest = np.zeros_like(cloth)
+    assert speed(cloth, at_rest, frames[0], 0.04, (0.0, 0.04)) == 0.0  # the moving box is out of reach
+    assert speed(cloth + [1.0, 0.0, 0.0], at_rest, frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)
+    assert speed(cloth, np.full_like(cloth, 30.0), frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)  # fast cloth

@@ -183,7 +183,7 @@ def settle(d: Dressing, state):
 def transition(d: Dressing, state):
     """Phase 3: a body dressed in its neutral pose moves into the first frame of its motion."""
     t0 = time.perf_counter()
-    d.timeline.transition_start = state.t
+    d.timeline.start_transition(state.t)
     d.enter(TRANSITION)
     if not d.timeline.keys:
         return state, None
@@ -204,7 +204,7 @@ def animate(d: Dressing, state):
     [m], per-frame self-intersecting triangle pairs)."""
     t0 = time.perf_counter()
     opts, tl = d.options, d.timeline
-    tl.motion_start = state.t
+    tl.start_motion(state.t)
     d.first_topology = (d.garment.mesh, d.garment.weld)
     d.enter(MOTION)
     due = list(opts.cuts)

@@ -90,6 +90,14 @@ class Timeline:
         pose = self.pose
         return np.concatenate([pose[None], pose + steps * (self.body.frames[0] - pose), self.body.frames])
 
+    def start_transition(self, t: float) -> None:
+        """The body starts to move (into its motion's first frame, if it has a rest pose) at ``t`` [s]."""
+        self.transition_start = t
+
+    def start_motion(self, t: float) -> None:
+        """Frame 0 of the motion is at ``t`` [s]."""
+        self.motion_start = t
+
     def follow_collider(self, margin: float) -> None:
         """The collider's margin is known: the step rule of a moving body uses it."""
         self.margin = margin
