@@ -35,7 +35,7 @@ class BodyCollider:
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.margin = float(margin)
         self._boxes = {}  # body frame → its TriangleBoxes
-        self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle)
+        self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle, their CSR)
         self._previous = None  # signed distance of every vertex after the last response
         self.deepest = 0.0  # deepest penetration any response found [m]
         self.queries = 0
@@ -65,7 +65,7 @@ class BodyCollider:
                                      "try a smaller time step or the implicit integrator")
         c = self._cache
         if cache and c is not None and c[0] == frame and c[1].shape == x.shape:
-            _, anchor, keys = c
+            _, anchor, keys, csr = c
             moved = np.flatnonzero(np.max(np.abs(x - anchor), axis=1) >= 0.5 * self.margin)
             if len(moved):
                 anchor = anchor.copy()
@@ -74,12 +74,14 @@ class BodyCollider:
                 mask[moved] = True
                 keys = np.concatenate([keys[~mask[keys // len(self.faces)]], self._query(x[moved], frame, moved)])
                 keys.sort(kind="stable")  # by vertex; two sorted runs: a stable (merge) sort is far quicker
-                self._cache = (frame, anchor, keys)
-        else:
-            keys = self._query(x, frame, np.arange(len(x)))
-            if cache:
-                self._cache = (frame, x.copy(), keys)
-        return self._csr(keys, len(x))
+                csr = self._csr(keys, len(x))
+                self._cache = (frame, anchor, keys, csr)
+            return csr
+        keys = self._query(x, frame, np.arange(len(x)))
+        csr = self._csr(keys, len(x))
+        if cache:
+            self._cache = (frame, x.copy(), keys, csr)
+        return csr
 
     def _csr(self, keys, n):
         """(ptr, tri) of sorted keys ``vertex · F + triangle`` over ``n`` vertices."""
