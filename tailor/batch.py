@@ -47,7 +47,7 @@ OPTIONS = {
 """Per-job options and their types; ``resolution`` is in cm (as on the command line), ``timeout``
 in seconds of wall time for the whole job."""
 
-DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": "final", "integrator": "implicit",
+DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": "normal", "integrator": "implicit",
             "self_collision": "auto", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0}
 
 MANIFEST_FIELDS = ("id", "status", "pattern", "body", "fabric", "wall_s", "cpu_s", "vertices", "welded_vertices", "frames",

@@ -136,8 +136,9 @@ def add_drape_command(sub) -> None:
     d.add_argument("--fps", type=float, default=25.0)
     d.add_argument("--resolution", type=float, default=2.0, metavar="CM", help="mesh edge length (cm, default 2)")
     d.add_argument("--integrator", default="implicit", choices=list(INTEGRATORS))
-    d.add_argument("--quality", default="final", choices=["draft", "normal", "final"],
-                   help="speed/accuracy of the implicit step (default final; see `tailor bench`)")
+    d.add_argument("--quality", default="normal", choices=["draft", "normal", "final"],
+                   help="speed/accuracy of the implicit step: draft, normal (default: a T-shirt walking 50 frames "
+                        "at 2 cm in 41 s, within 3 mm of final on average) or final (1.7-2x normal's time)")
     d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
     d.add_argument("--self-collision", default="auto", choices=["auto", "on", "off"],
                    help="cloth-cloth contact once the garment is sewn: auto (default) = only where it can "

@@ -128,7 +128,7 @@ class DrapeOptions:
     settle: float = 1.0
     record_sewing: bool = False
     self_collision: str = "auto"
-    quality: str = "final"
+    quality: str = "normal"
     wind: object = None
     cuts: tuple = field(default=())
     tear: bool = False
