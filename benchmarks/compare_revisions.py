@@ -62,7 +62,8 @@ def main() -> int:
         try:
             sides = {"base": base, "this": HERE}
             for repo in sides.values():  # compile the kernels of each checkout before timing it
-                _drape(repo, args.garments[0], 0.08, 1, Path(tmp) / "warm.npy")
+                for garment in args.garments:
+                    _drape(repo, garment, 0.04, 2, Path(tmp) / "warm.npy")
             for garment in args.garments:
                 times = {k: [] for k in sides}
                 for _ in range(args.rounds):

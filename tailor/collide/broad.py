@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import fcl
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .closest import closest_barycentric
 
@@ -187,38 +187,60 @@ def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = 0.06
                          np.ascontiguousarray(hi), target.lo, target.hi, target.corners, float(radius), exact)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _within(p, t, p_lo, p_hi, tri_lo, tri_hi, corners, r2, exact):
+    """Whether point (or box) ``p`` comes within √r2 of triangle ``t``'s box, and, if ``exact``, of the triangle."""
+    d2 = 0.0
+    for a in range(3):
+        g = max(tri_lo[t, a] - p_hi[p, a], 0.0, p_lo[p, a] - tri_hi[t, a])
+        d2 += g * g
+    if d2 > r2:  # the bounding boxes are out of reach: so is the triangle
+        return False
+    if not exact:
+        return True
+    a, b, c = corners[t, 0], corners[t, 1], corners[t, 2]
+    u, v, w = closest_barycentric(p_lo[p], a, b, c)
+    d2 = 0.0
+    for e in range(3):
+        g = p_lo[p, e] - (u * a[e] + v * b[e] + w * c[e])
+        d2 += g * g
+    return d2 <= r2
+
+
+@njit(cache=True, parallel=True)
 def _expand_boxes(pairs, p_ptr, p_order, t_ptr, t_order, p_lo, p_hi, tri_lo, tri_hi, corners, radius, exact):
     """The (point, triangle) pairs of met clusters whose boxes come within ``radius``, and, if
-    ``exact`` (points, not swept boxes), whose triangle itself does."""
+    ``exact`` (points, not swept boxes), whose triangle itself does.
+
+    Each met cluster pair is tested once, in parallel, into a mask of its own slots; the pairs
+    are then written in the order of the cluster pairs (the result does not depend on the
+    thread count)."""
     r2 = radius * radius
-    count = 0
-    out_p, out_t = np.empty(0, np.int64), np.empty(0, np.int64)
-    for pas in range(2):
-        if pas == 1:
-            out_p, out_t = np.empty(count, np.int64), np.empty(count, np.int64)
-            count = 0
-        for k in range(len(pairs)):
-            for m in range(t_ptr[pairs[k, 1]], t_ptr[pairs[k, 1] + 1]):
-                t = t_order[m]
-                for q in range(p_ptr[pairs[k, 0]], p_ptr[pairs[k, 0] + 1]):
-                    p = p_order[q]
-                    d2 = 0.0
-                    for a in range(3):
-                        g = max(tri_lo[t, a] - p_hi[p, a], 0.0, p_lo[p, a] - tri_hi[t, a])
-                        d2 += g * g
-                    if d2 > r2:  # the bounding boxes are out of reach: so is the triangle
-                        continue
-                    if exact:
-                        a, b, c = corners[t, 0], corners[t, 1], corners[t, 2]
-                        u, v, w = closest_barycentric(p_lo[p], a, b, c)
-                        d2 = 0.0
-                        for e in range(3):
-                            g = p_lo[p, e] - (u * a[e] + v * b[e] + w * c[e])
-                            d2 += g * g
-                        if d2 > r2:
-                            continue
-                    if pas == 1:
-                        out_p[count], out_t[count] = p, t
-                    count += 1
+    n = len(pairs)
+    start = np.zeros(n + 1, np.int64)
+    for k in range(n):
+        start[k + 1] = start[k] + (t_ptr[pairs[k, 1] + 1] - t_ptr[pairs[k, 1]]) * (p_ptr[pairs[k, 0] + 1] - p_ptr[pairs[k, 0]])
+    mask = np.zeros(start[n], np.uint8)
+    found = np.zeros(n + 1, np.int64)
+    for k in prange(n):
+        slot, hits = start[k], 0
+        for m in range(t_ptr[pairs[k, 1]], t_ptr[pairs[k, 1] + 1]):
+            t = t_order[m]
+            for q in range(p_ptr[pairs[k, 0]], p_ptr[pairs[k, 0] + 1]):
+                if _within(p_order[q], t, p_lo, p_hi, tri_lo, tri_hi, corners, r2, exact):
+                    mask[slot] = 1
+                    hits += 1
+                slot += 1
+        found[k + 1] = hits
+    for k in range(n):
+        found[k + 1] += found[k]
+    out_p, out_t = np.empty(found[n], np.int64), np.empty(found[n], np.int64)
+    for k in prange(n):
+        slot, at = start[k], found[k]
+        for m in range(t_ptr[pairs[k, 1]], t_ptr[pairs[k, 1] + 1]):
+            for q in range(p_ptr[pairs[k, 0]], p_ptr[pairs[k, 0] + 1]):
+                if mask[slot]:
+                    out_p[at], out_t[at] = p_order[q], t_order[m]
+                    at += 1
+                slot += 1
     return out_p, out_t

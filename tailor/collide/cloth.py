@@ -58,8 +58,8 @@ import scipy.sparse as sp
 
 from ..errors import SimulationUnstable
 from .broad import TriangleBoxes, boxes, clustered_query, corner_bounds, manager_contacts
-from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion,
-                            resolve_contacts, swept_within, unique_ints)
+from .cloth_kernels import (PARALLEL_PAIRS, close_edge_pairs, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial,
+                            pair_motion, resolve_contacts, unique_ints)
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
@@ -266,15 +266,11 @@ class SelfCollider:
         ea = np.repeat(self._ve_idx[self._ve_ptr[vertex][rep] + offset], 3)
         eb = self._face_edges[tri[rep]].ravel()
         ne = len(self._edges)
-        key = unique_ints(np.minimum(ea, eb) * ne + np.maximum(ea, eb))
-        ka, kb = key // ne, key % ne
-        ends_a, ends_b = self._edges[ka], self._edges[kb]
-        shared = (ends_a[:, :, None] == ends_b[:, None, :]).any(axis=(1, 2))
-        # only edges that come within the query radius: the candidates' other edge pairs are far apart
-        keep = np.flatnonzero(~shared)
+        # only pairs sharing no end whose boxes come within the query radius (the candidates' other
+        # edge pairs are far apart), each once: filtered before the sort that makes them distinct
         lo, hi = vertex_boxes
-        close = swept_within(lo, hi, self._edges, ka[keep], kb[keep], radius)
-        ea, eb = ends_a[keep[close]], ends_b[keep[close]]
+        key = unique_ints(close_edge_pairs(ea, eb, self._edges, lo, hi, radius, ne))
+        ea, eb = self._edges[key // ne], self._edges[key % ne]
         near = self._is_ring(ea[:, :, None], eb[:, None, :]).any(axis=(1, 2))
         return np.ascontiguousarray(np.column_stack([ea, eb]), dtype=np.int64), near
 
