@@ -73,6 +73,16 @@ def _gradient(a, b, c, d0, d1, d2, dist2):
     return n0, n1, n2, 0.0
 
 
+@njit(cache=True, inline="always")
+def _box_distance2(p, a, b, c):
+    """Squared distance from p to the bounding box of triangle abc: a lower bound of its distance²."""
+    d2 = 0.0
+    for e in range(3):
+        g = max(min(a[e], b[e], c[e]) - p[e], 0.0, p[e] - max(a[e], b[e], c[e]))
+        d2 += g * g
+    return d2
+
+
 TIE = 1e-9
 """Relative difference of squared distances below which two body triangles are equally close."""
 
@@ -98,6 +108,8 @@ def nearest_into(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal
         for k in range(ptr[i], ptr[i + 1]):
             t = tri[k]
             a, b, c = bx[faces[t, 0]], bx[faces[t, 1]], bx[faces[t, 2]]
+            if _box_distance2(x[i], a, b, c) > (best * (1.0 + TIE) + 1e-30) * (1.0 + 1e-12):
+                continue  # even its bounding box is farther than the closest so far (a tie included)
             u, v, w = closest_barycentric(x[i], a, b, c)
             d0 = x[i, 0] - (u * a[0] + v * b[0] + w * c[0])
             d1 = x[i, 1] - (u * a[1] + v * b[1] + w * c[1])
