@@ -51,7 +51,7 @@ DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": "normal", "
             "self_collision": "auto", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0}
 
 MANIFEST_FIELDS = ("id", "status", "pattern", "body", "fabric", "wall_s", "cpu_s", "vertices", "welded_vertices", "frames",
-                   "max_penetration_mm", "self_intersections", "seam_gap_mm", "reason", "options")
+                   "max_penetration_mm", "crossings", "seam_gap_mm", "reason", "options")
 
 
 class JobTimeout(TailorError):
@@ -218,7 +218,7 @@ def _measures(report: dict, frames) -> dict:
     """The manifest's numbers from a drape's report (``DrapeResult.report`` or its ``report.json``)."""
     return {"vertices": report.get("vertices", ""), "welded_vertices": report.get("welded_vertices", ""),
             "frames": frames, "max_penetration_mm": round(report.get("max_penetration_m", 0.0) * 1e3, 3),
-            "self_intersections": max(report.get("self_intersections_per_frame", []), default=""),
+            "crossings": max(report.get("crossings_per_frame", []), default=""),
             "seam_gap_mm": round(report["phases"]["sewing"]["max_gap_at_merge_m"] * 1e3, 3)}
 
 

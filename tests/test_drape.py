@@ -37,7 +37,7 @@ def test_skirt_sews_into_one_piece_without_penetration(skirt_static, tmp_path):
     report = json.loads((out / "report.json").read_text())
     assert report["max_penetration_m"] <= 0.002
     # the written frames do not pass through themselves, and the report counts it frame by frame
-    assert report["self_intersections_per_frame"] == [0, 0, 0] == [len(self_intersections(vertices, faces))] * 3
+    assert report["crossings_per_frame"] == [0, 0, 0] == [len(self_intersections(vertices, faces))] * 3
     assert report["phases"]["sewing"]["max_gap_at_merge_m"] <= 0.3 * 0.04 + 1e-9
     # every seam pair is one vertex now: gap exactly 0
     x = result.frames[-1]
@@ -174,7 +174,7 @@ def test_trousers_and_dress_sew_into_one_piece_on_the_mannequin(name, mannequin)
     assert result.report.max_penetration_m <= 0.002
     assert all(np.isfinite(f).all() for f in result.frames)
     # sewn without crossing itself (the dress keeps one pair from sewing)
-    assert max(result.report.self_intersections_per_frame) <= (0 if name == "trousers" else 1)
+    assert max(result.report.crossings_per_frame) <= (0 if name == "trousers" else 1)
     marks = find_landmarks(mannequin.vertices, mannequin.faces)
     top = result.frames[-1][:, 2].max()
     if name == "trousers":  # hanging from the waist (placed 5.5 cm above the landmark), legs down to the ankles
@@ -189,14 +189,14 @@ def test_trouser_legs_are_sewn_without_crossing_each_other(mannequin):
     self-collision pass then holds them crossed)."""
     pattern = read_pattern(PANELS / "trousers.json")
     sewn = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2)
-    assert sewn.report.self_intersections_per_frame == [0]
+    assert sewn.report.crossings_per_frame == [0]
     x = sewn.frames[0]
     for name, sign in (("front_left", 1), ("back_right", -1)):
         legs = sewn.mesh.panel_vertices(pattern.panel_index(name))
         low = legs[x[legs, 2] < 0.6]
         assert (sign * x[low, 0] > 0).all()  # below the crotch, each leg on its own side
     crossed = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2, limb_walls=False)
-    assert crossed.report.self_intersections_per_frame[0] > 10
+    assert crossed.report.crossings_per_frame[0] > 10
 
 
 @pytest.mark.slow
@@ -211,7 +211,7 @@ def test_trousers_stay_up_on_the_walking_mannequin():
     assert _one_piece(result)
     # walking, the legs' inner sides stay on their sides of the plane between the thighs (the walls
     # follow the body) and never pass through each other
-    assert result.report.self_intersections_per_frame == [0] * 51
+    assert result.report.crossings_per_frame == [0] * 51
     for x in result.frames[::10]:
         for name, sign in (("front_left", 1), ("back_right", -1)):
             legs = result.mesh.panel_vertices(pattern.panel_index(name))

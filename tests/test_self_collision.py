@@ -156,3 +156,20 @@ def test_self_intersections_finds_crossings_and_ignores_neighbours():
     apart = np.array([[-0.1, 0.2, -0.5], [-0.1, 0.2, 0.5], [-0.6, 3.0, 0.0]])  # outside the edge: no crossing
     assert len(self_intersections(np.r_[tri, apart], [[0, 1, 2], [3, 4, 5]])) == 0
     assert self_intersections(np.zeros((0, 3)), np.zeros((0, 3), int)).shape == (0, 2)
+
+
+def test_edge_crossings_find_every_intersecting_triangle_pair_and_ignore_neighbours():
+    from tailor.collide import edge_crossings
+
+    tri = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    assert len(edge_crossings(np.r_[tri, [[1.0, 1.0, 0.0]]], [[0, 1, 2], [1, 3, 2]])) == 0  # neighbours
+    pierce = np.array([[0.2, 0.2, -0.5], [0.3, 0.2, 0.5], [0.25, 0.6, 0.5]])  # through the first triangle
+    found = edge_crossings(np.r_[tri, pierce], [[0, 1, 2], [3, 4, 5]])
+    assert len(found) == 2 and set(found[:, 2]) == {0}  # its two edges from below pass through triangle 0
+    apart = pierce + [0.0, 0.0, 1.0]
+    assert len(edge_crossings(np.r_[tri, apart], [[0, 1, 2], [3, 4, 5]])) == 0
+    rng = np.random.default_rng(3)  # random soups: a triangle pair intersects iff an edge of one crosses the other
+    for _ in range(20):
+        v = rng.uniform(0, 1, (6, 3))
+        pairs = len(self_intersections(v, [[0, 1, 2], [3, 4, 5]]))
+        assert (len(edge_crossings(v, [[0, 1, 2], [3, 4, 5]])) > 0) == (pairs > 0)

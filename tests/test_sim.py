@@ -6,7 +6,6 @@ import pytest
 
 from conftest import sheet
 from tailor.errors import SimulationUnstable
-from tailor.forces import total_forces
 from tailor.integrators import make_integrator
 from tailor.sim import Guard, Stepper, simulate
 

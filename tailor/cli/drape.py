@@ -65,9 +65,15 @@ def _cmd_drape(args) -> int:
     print(f"{pattern.source} on {args.body}: {r.vertices} vertices ({r.welded_vertices} after sewing), "
           f"{len(result.frames)} frames, max penetration {r.max_penetration_m * 1000:.1f} mm, "
           f"seam gap at merge {r.phases['sewing'].extra['max_gap_at_merge_m'] * 1000:.1f} mm, "
-          f"self-intersections {max(r.self_intersections_per_frame, default=0)}, "
+          f"crossings {max(r.crossings_per_frame, default=0)}, "
           + (f"{len(options.cuts)} cuts and {r.tearing['edges_torn']} edges torn, " if r.tearing is not None else "")
           + f"{time.perf_counter() - t0:.1f} s -> {out}/")
+    crossings = r.crossings_per_frame
+    if max(crossings, default=0):
+        worst = max(range(len(crossings)), key=crossings.__getitem__)
+        print(f"tailor: warning: cloth passes through cloth: {sum(c > 0 for c in crossings)} of {len(crossings)} frames "
+              f"have edges through triangles (most: {crossings[worst]} in frame {worst}; report.json crossings_per_frame)",
+              file=sys.stderr)
     return 0
 
 

@@ -9,7 +9,8 @@ a margin and reuse the candidates while nothing has moved further than it.
 * :mod:`.closest`, :mod:`.inside` — closest point on a surface, inside a closed surface (compiled);
 * :mod:`.body` — :class:`BodyCollider`, Carignan Eq. 9–14;
 * :mod:`.cloth`, :mod:`.cloth_kernels` — :class:`SelfCollider`, Eq. 5–8;
-* :mod:`.intersect` — whether a mesh passes through itself;
+* :mod:`.intersect`, :mod:`.crossings` — whether a mesh passes through itself (triangle pairs by FCL;
+  edges through triangles, compiled, per frame);
 * :mod:`.contacts` — :class:`Contacts`, what a response hands to the next implicit step.
 """
 
@@ -17,8 +18,9 @@ from .body import BodyCollider
 from .broad import TriangleBoxes, bvh_object, clustered_query, sphere_query
 from .cloth import SELF_COLLISION_MODES, SelfCollider
 from .contacts import NO_CONTACTS, Contacts
+from .crossings import edge_crossings
 from .inside import InsideTest, points_inside
 from .intersect import self_intersections
 
 __all__ = ["BodyCollider", "SelfCollider", "SELF_COLLISION_MODES", "bvh_object", "points_inside", "InsideTest",
-           "self_intersections", "sphere_query", "clustered_query", "TriangleBoxes", "Contacts", "NO_CONTACTS"]
+           "self_intersections", "edge_crossings", "sphere_query", "clustered_query", "TriangleBoxes", "Contacts", "NO_CONTACTS"]

@@ -77,7 +77,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
     state, phase = transition(d, state)
     if phase is not None:
         report.phases["transition"] = phase
-    state, report.phases["motion"], report.max_penetration_m_per_frame, report.self_intersections_per_frame = animate(d, state)
+    state, report.phases["motion"], report.max_penetration_m_per_frame, report.crossings_per_frame = animate(d, state)
     _close(report, d, t_start)
     return DrapeResult(d.frames, d.body_frames, *d.first_topology, body.faces, pattern, report, topology=d.topology)
 

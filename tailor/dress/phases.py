@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from ..collide import self_intersections
+from ..collide import edge_crossings
 from ..contact import LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
@@ -224,7 +224,7 @@ def animate(d: Dressing, state):
         elif changing:
             state = d.change(state, due)
         penetration.append(d.contacts.penetration(state.x, state.t))
-        crossings.append(len(self_intersections(state.x, d.garment.model.faces)))  # the cloth through itself
+        crossings.append(len(edge_crossings(state.x, d.garment.model.faces)))  # the cloth through itself
         d.emit(state, tl.at(state.t)[0])
         d.tell(f + 1, opts.frames, state)
     used = tl.steps_used

@@ -74,7 +74,7 @@ class DrapeReport:
     max_triangle_stretch_dressed: float = 0.0
     max_penetration_m_per_frame: list = field(default_factory=list)
     max_penetration_m: float = 0.0
-    self_intersections_per_frame: list = field(default_factory=list)  # intersecting triangle pairs (none sharing a vertex)
+    crossings_per_frame: list = field(default_factory=list)  # edges through a triangle of the garment (tailor.collide.edge_crossings)
     wall_s: float = 0.0
     steps: int = 0
     cg_iterations: int = 0
