@@ -37,6 +37,7 @@ class BodyCollider:
         self._boxes = {}  # body frame → its TriangleBoxes
         self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle, their CSR)
         self._previous = None  # signed distance of every vertex after the last response
+        self._seen = None  # (positions, lower bounds of their distances, body) at the last response
         self.deepest = 0.0  # deepest penetration any response found [m]
         self.queries = 0
         self.queried_points = 0
@@ -45,6 +46,7 @@ class BodyCollider:
         """Drop what is remembered per cloth vertex (the cloth's vertices were renumbered: a cut or a tear)."""
         self._cache = None
         self._previous = None
+        self._seen = None
 
     def _body(self, frame):
         if frame not in self._boxes:
@@ -169,11 +171,10 @@ class BodyCollider:
         solve holding that (:class:`tailor.integrators.ImplicitEuler` ``predict``) lands the cloth
         within the step instead of having it pushed out afterwards.
         """
-        rows = None
+        test = ~model.vertex_pinned
         if skip is not None and len(skip):
-            test = ~model.vertex_pinned
             test[skip] = False
-            rows = np.flatnonzero(test)
+        rows = np.flatnonzero(test & ~self._out_of_reach(x_end, body_x, thickness))
         dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, *self.candidates(x_end, frame), body_x, rows),
                                                      body_x)
         close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
@@ -187,6 +188,17 @@ class BodyCollider:
         close, n, vb, start = close[ok], n[ok], vb[ok], start[ok]
         return Contacts(close, n, np.einsum("ij,ij->i", vb, n) - np.maximum(start - thickness, 0.0) / dt, model.vertex_count)
 
+    def _out_of_reach(self, x, body_x, thickness) -> np.ndarray:
+        """Vertices at ``x`` that cannot be within ``thickness`` of the body at ``body_x``: their distance
+        at the last response, less how far they and the body have moved since, still exceeds it."""
+        seen = self._seen
+        if seen is None or len(seen[0]) != len(x):
+            return np.zeros(len(x), bool)
+        x_at, bound, body_at = seen
+        shift = 0.0 if body_x is body_at else float(np.sqrt(np.einsum("ij,ij->i", body_x - body_at, body_x - body_at).max()))
+        moved = np.sqrt(np.einsum("ij,ij->i", x - x_at, x - x_at))
+        return bound - moved - shift > thickness
+
     def _hits(self, x, body_x, frame, thickness):
         """The vertices to respond to: (hit ids, dist, tri, bary, normal) of all vertices.
 
@@ -196,6 +208,9 @@ class BodyCollider:
         band above the thickness keeps resting contact from flickering on and off.
         """
         dist, tri, bary, normal = self.nearest(x, body_x, frame)
+        # the cached candidates hold every triangle within margin/2: a distance found is exact up to
+        # there, and none found (or a farther one) means at least margin/2
+        self._seen = (x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), 0.5 * self.margin), body_x)
         prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
         crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
         plausible = (dist > -0.5 * self.margin) | crossed
