@@ -59,7 +59,8 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
         - ``cuts``: :class:`~tailor.tearing.Cut` on the dressed garment, ``time`` from frame 0,
           points in the body's frame [m]; made after the first step ending at or after its time;
         - ``tear``: the garment tears where stretched across an edge beyond its fabric's
-          ``tear_strain``. With cuts or tearing see :attr:`DrapeResult.topology`.
+          ``tear_strain``. With cuts or tearing see :attr:`DrapeResult.topology`;
+        - ``limb_walls`` (True): each leg's panels keep to their side of the plane between the legs.
 
     Raises
     ------

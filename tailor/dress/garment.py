@@ -17,11 +17,11 @@ from ..forces import total_forces
 from ..model import AIR_DENSITY, build_model
 from ..seams import Sewing, merge_state
 from ..tearing import TearableCloth
+from ..units import GRAVITY
 from .options import COMPRESSION, NEAR_RATE, NEAR_SEAM
 
 __all__ = ["Garment", "attachment_vertices"]
 
-GRAVITY = (0.0, 0.0, -9.80665)
 
 
 def attachment_vertices(pattern, mesh, attachment) -> np.ndarray:
@@ -92,7 +92,7 @@ class Garment:
         new = self.sewing.weld_map(self.mesh.vertex_count)
         xw, vw = merge_state(x_orig, v_orig, self.mass, new)
         m = build_model(self.mesh, self.fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
-                        gravity=GRAVITY if self.gravity else (0.0, 0.0, 0.0))
+                        gravity=(0.0, 0.0, -GRAVITY if self.gravity else 0.0))
         if len(self.pins):
             m = m.with_pins(np.unique(new[self.pins]))
         if self.sewing.open_count:
