@@ -116,14 +116,13 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
         forces = forces or functools.partial(total_forces, wind=wind)
         integ.configure(replace(integ.settings, wind=wind))  # the solve treats drag relative to this air
     frames = []
-    stepper_steps = []
+    steps_before = integ.counters.steps  # an integrator handed in may have stepped before
     for _, st in simulate(model, state, duration=duration, frame_rate=fps, integrator=integ, dt=dt, contacts=contacts,
-                          hooks=[*hooks, lambda m, s_, h: stepper_steps.append(1)], guard=guard or Guard(),
-                          forces=forces or total_forces):
+                          hooks=hooks, guard=guard or Guard(), forces=forces or total_forces):
         frames.append(st.x.copy())
         if on_frame is not None:
             on_frame(len(frames) - 1, st)
-    report = {"wall_s": time.perf_counter() - t0, "steps": len(stepper_steps), "vertices": int(model.vertex_count),
+    report = {"wall_s": time.perf_counter() - t0, "steps": integ.counters.steps - steps_before, "vertices": int(model.vertex_count),
               "max_contact_correction_m": contacts.deepest, "self_collision": contacts.self_report(),
               "cg_iterations": integ.counters.iterations, "halved_steps": integ.counters.halved_steps()}
     return SceneResult(frames, model, report)
