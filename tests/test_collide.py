@@ -154,3 +154,24 @@ def test_cloth_on_an_incline_slides_exactly_when_tan_theta_exceeds_mu(ratio, sli
         assert travel == pytest.approx(expected, rel=0.1)
     else:
         assert abs(travel) < 1e-4
+
+
+def test_friction_moves_a_vertex_only_for_the_part_of_the_step_after_it_landed():
+    """Eq. 14's impulse acts at the landing: a vertex that reaches the floor at the very end of a step
+    travelled the whole step in flight and keeps that travel (only its velocity loses friction);
+    one that was on the floor the whole step slides the step with the reduced velocity."""
+    model, x0 = sheet(2, 2, 0.02, "cotton", vertical=False)
+    floor = _incline(0.0)
+    thickness, dt, mu = 0.003, 0.04, 0.4
+    v = np.array([0.5, 0.0, -1.0])  # 1 m/s down, 0.5 m/s along the floor
+    for height, after in ((thickness + dt * 1.0, 0.0), (thickness, dt)):  # lands at the end; rests throughout
+        start = x0 + [0.0, 0.0, height]
+        state = model.state(start + dt * v, np.tile(v, (len(x0), 1)))  # the step as an integrator left it
+        collider = BodyCollider(floor.frames, floor.faces, margin=0.1)  # the end, 4 cm deep, within margin/2
+        collider.respond(model, state, dt, floor.frames[0], np.zeros_like(floor.frames[0]), 0, thickness=thickness,
+                         friction=mu)
+        slowed = 0.5 - mu * 1.0  # the approach cancelled (1 m/s) buys μ·1 m/s of tangential velocity
+        assert np.allclose(state.v, [slowed, 0.0, 0.0])
+        assert np.allclose(state.x[:, 2], thickness)
+        travel = state.x[:, 0] - start[:, 0]
+        assert np.allclose(travel, (dt - after) * 0.5 + after * slowed)

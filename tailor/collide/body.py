@@ -256,8 +256,13 @@ class BodyCollider:
         new_rel = np.where(pressed, tangential * keep[:, None] + np.maximum(vn, 0.0)[:, None] * n, rel)
         v_new = vb + new_rel
         # the step already moved the vertex with its old velocity: move it as the new one would
-        # (with the landing approach), then out to the thickness if it started closer
-        shift = dt * (v_new - state.v[hit] + np.where(pressed, np.minimum(land, 0.0)[:, None] * n, 0.0))
+        # (with the landing approach), then out to the thickness if it started closer. Friction
+        # acts from the landing on: its change of the tangential velocity moves the vertex only
+        # for the part of the step after it reached the thickness (none for one landing at its end)
+        after = np.where(vn < 0, np.clip(dt - np.maximum(start_gap - thickness, 0.0) / np.maximum(-vn, 1e-300), 0.0, dt), dt)
+        dv = v_new - state.v[hit]
+        dv_normal = np.einsum("ij,ij->i", dv, n)
+        shift = after[:, None] * (dv - dv_normal[:, None] * n) + dt * (dv_normal + np.where(pressed[:, 0], np.minimum(land, 0.0), 0.0))[:, None] * n
         gap = dist[hit] + np.einsum("ij,ij->i", shift, n)
         state.x[hit] += shift + np.maximum(thickness - gap, 0.0)[:, None] * n
         state.v[hit] = v_new

@@ -41,13 +41,14 @@ class Counters:
     iterations: int = 0  # CG iterations over all solves
     halvings: int = 0  # steps taken as halves because CG did not converge
     stretch_halvings: int = 0  # ... because a triangle would stretch too far in one step
+    landing_halvings: int = 0  # ... because vertices were still landing on the body after every contact pass
     predicted: int = 0  # contacts added by the landing prediction
     slipped: int = 0  # stuck contacts whose reaction left the Coulomb cone
     released: int = 0  # held contacts the body would have had to pull on
 
     def halved_steps(self) -> dict:
         """Steps taken as two halves, by cause."""
-        return {"unconverged": self.halvings, "overstretch": self.stretch_halvings}
+        return {"unconverged": self.halvings, "overstretch": self.stretch_halvings, "landing": self.landing_halvings}
 
 
 @dataclass(frozen=True, slots=True)

@@ -253,10 +253,20 @@ class ImplicitEuler(IntegratorBase):
                 held, landed = self._landing(model, state, dt, dv, held, let_go, predict)
                 changed = changed or landed
             if not changed:
-                break
+                return held, iterations, converged, True
             extra, converged = self._solve(system, dv, v, held)
             iterations += extra
-        return held, iterations, converged
+        settled = predict is None or not converged or not self._lands(model, state, dt, dv, held, let_go, predict)
+        return held, iterations, converged, settled
+
+    def _lands(self, model, state, dt, dv, held, let_go, predict) -> bool:
+        """Whether the solved step would still bring vertices onto the body that it does not hold."""
+        n = model.vertex_count
+        v1 = state.v + dv.reshape(n, 3)
+        more = predict(model, state, state.x + dt * v1, v1, dt, held.ids)
+        if more is None or not len(more.ids):
+            return False
+        return bool((~np.isin(more.ids, held.ids) & ~np.isin(more.ids, let_go) & ~model.vertex_pinned[more.ids]).any())
 
     def _halves(self, model, state, dt, forces, contacts, predict, depth):
         """The step taken as two half steps, each holding the contacts this one was given."""
@@ -290,13 +300,17 @@ class ImplicitEuler(IntegratorBase):
             dv = dt * f / np.repeat(model.vertex_mass, 3) * system.free
         held = _Held.given(contacts, model)
         iterations, converged = self._solve(system, dv, state.v.reshape(-1), held)
+        settled = True
         if converged:
-            held, extra, converged = self._active_set(model, state, dt, system, dv, held, predict)
+            held, extra, converged, settled = self._active_set(model, state, dt, system, dv, held, predict)
             iterations += extra
         self.counters.iterations += iterations
         self.counters.solves += 1
         if not converged and iterations >= self.max_iterations and depth < self.max_halvings and np.all(np.isfinite(dv)):
             self.counters.halvings += 1
+            return self._halves(model, state, dt, forces, contacts, predict, depth)
+        if not settled and depth < self.max_halvings:
+            self.counters.landing_halvings += 1
             return self._halves(model, state, dt, forces, contacts, predict, depth)
         self._check(state, dt, dv, converged, iterations)
         dv[~system.free] = 0.0
