@@ -10,11 +10,10 @@ threshold distance from the cloth's vertices") runs in three stages:
    one direction is a height field over it and cannot come near itself except through its own
    neighbourhood (Volino & Magnenat-Thalmann's normal-cone argument). Flat cloth is skipped.
 2. **Broad phase**: the active triangles that come within ``thickness + margin`` of an active
-   vertex anywhere on the step's straight-line motion, found by FCL between boxes round clusters
-   of vertices and boxes round clusters of triangles, each box swept from the vertex's or
-   triangle's place at the last step to its place now
-   (:func:`~tailor.collide.body.clustered_query`, rebuilt each query: python-fcl cannot refit;
-   one Python object per cluster pair instead of per vertex–triangle pair). The candidates stay
+   vertex anywhere on the step's straight-line motion, and the active edges that come that near
+   one another, found between boxes swept from each vertex's place at the last step to its place
+   now, over a compiled uniform grid rebuilt each query (:mod:`tailor.collide.grid`: python-fcl
+   can neither refit nor hand back pairs without a Python object each). The candidates stay
    valid while no vertex has moved more than ``margin / 2`` relative to the cloth's centroid
    since the query (two points then approach by less than ``margin``). Swept boxes are tight
    for cloth falling or swinging as a whole, where one radius for every pair (``margin`` plus
@@ -24,8 +23,7 @@ threshold distance from the cloth's vertices") runs in three stages:
    vertex is a contact if it is nearer than ``thickness``, if its velocity would bring it nearer
    within the next step, or if it crossed the triangle's plane since the last step (judged by the
    side it was on then, and only if it travelled that far relative to the triangle). **Edge–edge**
-   pairs (every edge at a candidate vertex against the candidate triangle's edges, none sharing an
-   end) are judged the same way at their closest points, with the side of the edges' common
+   pairs (none sharing an end) are judged the same way at their closest points, with the side of the edges' common
    normal remembered: two sheets sliding across each other cross edge through edge with no vertex
    ever over the other's triangle. A triangle touching the vertex's 1-ring (edges whose ends are
    neighbours) keeps only :data:`NEAR_THICKNESS` of the thickness: a sharp seam corner is close
@@ -57,9 +55,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SimulationUnstable
-from .broad import TriangleBoxes, boxes, clustered_query, corner_bounds, manager_contacts
-from .cloth_kernels import (PARALLEL_PAIRS, close_edge_pairs, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial,
-                            pair_motion, resolve_contacts, unique_ints)
+from .broad import boxes, corner_bounds, manager_contacts
+from .cloth_kernels import PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts, unique_ints
+from .grid import edge_edge_pairs, vertex_triangle_pairs
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
@@ -69,6 +67,8 @@ FOLDED_COS = 0.5
 SELF_CELL = 0.1
 """Side [m] of the cubes the self-collision broad phase bins the cloth into: fewer cluster pairs (one
 Python object each) than the body's 6 cm (docs/measurements.md)."""
+GRID_EDGES = 2.0
+"""Side of the broad phase's grid cells, in mean edge lengths of the cloth."""
 MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 
@@ -117,6 +117,8 @@ class SelfCollider:
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         self._ring = np.unique(np.concatenate([e[:, 0] * self.n + e[:, 1], e[:, 1] * self.n + e[:, 0],
                                                np.arange(self.n) * (self.n + 1)]))  # sorted keys p·N + q
+        self._ring_csr = (np.searchsorted(self._ring // self.n, np.arange(self.n + 1)).astype(np.int64),
+                          (self._ring % self.n).astype(np.int64))  # each vertex's neighbours and itself
         # undirected edges, each vertex's edges (CSR) and each face's edges, for edge–edge pairs
         und = np.sort(e, axis=1)
         self._edges, face_edge = np.unique(und, axis=0, return_inverse=True)
@@ -125,6 +127,8 @@ class SelfCollider:
         order = np.argsort(ends, kind="stable")
         self._ve_idx = (order // 2).astype(np.int64)
         self._ve_ptr = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=self.n))]).astype(np.int64)
+        length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
+        self._grid_cell = GRID_EDGES * float(np.mean(length)) if len(length) else self.cell
         self._ee = np.zeros((0, 4), np.int64)
         self._anchor = None  # positions relative to the centroid at the last query
         self._reach = self.margin  # how deep a pair may have crossed in a step (the narrow phase cut-off beyond thickness)
@@ -232,53 +236,24 @@ class SelfCollider:
         self._ee_near = np.zeros(0, bool)
         if len(faces):
             verts = unique_ints(self.faces[faces].ravel())
-            target = TriangleBoxes(x, self.faces[faces], self.cell, vertex_boxes=swept)
-            point, local = clustered_query(x[verts], radius, target, cell=self.cell,
-                                           point_boxes=None if swept is None else (swept[0][verts], swept[1][verts]))
-            vertex, tri = verts[point], faces[local]
+            lo, hi = (x, x) if swept is None else swept
             # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
             # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
             # (ignoring those, a strip crumpling over one or two triangles passed through itself)
-            own = (self.faces[tri] == vertex[:, None]).any(axis=1)
-            vertex, tri = vertex[~own], tri[~own]
+            vertex, tri, near = vertex_triangle_pairs(verts, faces, self.faces, lo, hi, x, radius, self._grid_cell,
+                                                      self._ring_csr, exact=swept is None)
             order = np.lexsort((tri, vertex))
-            vertex, tri = vertex[order], tri[order]
-            self._tri_near = self._is_ring(vertex[:, None], self.faces[tri]).any(axis=1)
+            vertex, tri, self._tri_near = vertex[order], tri[order], near[order]
             self._vtx = np.ascontiguousarray(vertex, dtype=np.int64)
             self._tri = tri
             if self.edges:
-                self._ee, self._ee_near = self._edge_pairs((x, x) if swept is None else swept, vertex, tri, radius)
-            self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
+                self._ee, self._ee_near = edge_edge_pairs(unique_ints(self._face_edges[faces].ravel()), self._edges, lo,
+                                                          hi, radius, self._grid_cell, self._ring_csr)
             self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
+            self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
         self._anchor = x.copy()
         self.stats["queries"] += 1
         self.stats["query_s"] += time.perf_counter() - t0
-
-    def _edge_pairs(self, vertex_boxes, vertex, tri, radius):
-        """Edge–edge candidates (E, 4): every edge at a candidate vertex against the candidate triangle's
-        edges, without pairs sharing an end, whose boxes (round their ends' ``vertex_boxes``) come
-        within ``radius``; and whether their ends are 1-ring neighbours."""
-        deg = np.diff(self._ve_ptr)[vertex]
-        if not deg.sum():
-            return np.zeros((0, 4), np.int64), np.zeros(0, bool)
-        rep = np.repeat(np.arange(len(vertex)), deg)
-        offset = np.arange(len(rep)) - np.repeat(np.cumsum(deg) - deg, deg)
-        ea = np.repeat(self._ve_idx[self._ve_ptr[vertex][rep] + offset], 3)
-        eb = self._face_edges[tri[rep]].ravel()
-        ne = len(self._edges)
-        # only pairs sharing no end whose boxes come within the query radius (the candidates' other
-        # edge pairs are far apart), each once: filtered before the sort that makes them distinct
-        lo, hi = vertex_boxes
-        key = unique_ints(close_edge_pairs(ea, eb, self._edges, lo, hi, radius, ne))
-        ea, eb = self._edges[key // ne], self._edges[key % ne]
-        near = self._is_ring(ea[:, :, None], eb[:, None, :]).any(axis=(1, 2))
-        return np.ascontiguousarray(np.column_stack([ea, eb]), dtype=np.int64), near
-
-    def _is_ring(self, p, q):
-        """Whether vertices ``p`` and ``q`` (broadcast) are the same or neighbours."""
-        k = p * self.n + q
-        at = np.minimum(np.searchsorted(self._ring, k), len(self._ring) - 1)
-        return self._ring[at] == k
 
     @property
     def candidate_pairs(self) -> int:

@@ -16,7 +16,7 @@ from numba import njit, prange
 from .broad import run_starts
 
 __all__ = ["detect_vt", "detect_vt_serial", "detect_ee", "detect_ee_serial", "pair_motion", "resolve_contacts",
-           "close_edge_pairs", "unique_ints", "NEAR_THICKNESS", "PARALLEL_PAIRS"]
+           "unique_ints", "NEAR_THICKNESS", "PARALLEL_PAIRS"]
 
 NEAR_THICKNESS = 0.25
 """Fraction of the thickness kept between a vertex and a triangle of its 1-ring (or two edges whose
@@ -202,28 +202,6 @@ def detect_ee_serial(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a
     """:func:`detect_ee` on one thread."""
     for k in range(len(pairs)):
         _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
-
-
-@njit(cache=True)
-def close_edge_pairs(ea, eb, edges, lo, hi, limit, ne):
-    """Keys ``min·ne + max`` of the edge pairs (``ea[k]``, ``eb[k]``) that share no end and whose boxes
-    (round their ends' boxes ``lo``/``hi``) come within ``limit``; repeated pairs repeat."""
-    out = np.empty(len(ea), np.int64)
-    count = 0
-    for k in range(len(ea)):
-        a, b = min(ea[k], eb[k]), max(ea[k], eb[k])
-        a0, a1, b0, b1 = edges[a, 0], edges[a, 1], edges[b, 0], edges[b, 1]
-        if a0 == b0 or a0 == b1 or a1 == b0 or a1 == b1:
-            continue
-        d2 = 0.0
-        for q in range(3):
-            g = max(min(lo[b0, q], lo[b1, q]) - max(hi[a0, q], hi[a1, q]), 0.0,
-                    min(lo[a0, q], lo[a1, q]) - max(hi[b0, q], hi[b1, q]))
-            d2 += g * g
-        if d2 <= limit * limit:
-            out[count] = a * ne + b
-            count += 1
-    return out[:count]
 
 
 @njit(cache=True)

@@ -1,0 +1,255 @@
+"""A compiled uniform-grid broad phase: the pairs of boxes that come within a distance of each other.
+
+The self-collision candidates change every few steps as the cloth moves, and python-fcl can
+neither refit its hierarchies nor hand back pairs without one Python object each. Here the item
+boxes are binned into a grid of cubes once per query; each query box, grown by the radius, visits
+the cells it covers, and a pair is reported only from the cell holding the lower corner of the two
+boxes' overlap, so each pair comes out once without a sort. Counting and filling are two parallel
+passes over the queries (no shared state between threads). Used for vertex–triangle and
+edge–edge candidates (:class:`~tailor.collide.cloth.SelfCollider`); FCL keeps the body's
+proximity queries.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .closest import closest_barycentric
+
+__all__ = ["Grid", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
+
+MAX_CELLS = 1 << 21
+"""Cells a grid holds, about (one more per axis at most: 16 MB of cell pointers); coarser cells beyond."""
+
+
+class Grid:
+    """Cubes of side ``cell`` over the boxes (lo, hi) of a query (at most :data:`MAX_CELLS`)."""
+
+    def __init__(self, lo, hi, cell: float):
+        self.origin = np.asarray(lo, float).min(axis=0)
+        extent = np.maximum(np.asarray(hi, float).max(axis=0) - self.origin, 1e-9)
+        cell = max(float(cell), float(np.prod(extent) / MAX_CELLS) ** (1.0 / 3.0), 1e-6)
+        self.dims = (np.floor(extent / cell).astype(np.int64) + 1)
+        self.cell = cell
+
+
+@njit(cache=True, inline="always")
+def _cell_of(p, origin, cell, dims, axis):
+    return min(max(int(math.floor((p - origin[axis]) / cell)), 0), dims[axis] - 1)
+
+
+@njit(cache=True)
+def _bin(lo, hi, origin, cell, dims):
+    """CSR (ptr, items) of the boxes (lo[k], hi[k]) meeting each cell."""
+    count = 0
+    for k in range(len(lo)):
+        n = 1
+        for a in range(3):
+            n *= _cell_of(hi[k, a], origin, cell, dims, a) - _cell_of(lo[k, a], origin, cell, dims, a) + 1
+        count += n
+    keys = np.empty(count, np.int64)
+    items = np.empty(count, np.int64)
+    m = 0
+    for k in range(len(lo)):
+        i0, j0, k0 = (_cell_of(lo[k, 0], origin, cell, dims, 0), _cell_of(lo[k, 1], origin, cell, dims, 1),
+                      _cell_of(lo[k, 2], origin, cell, dims, 2))
+        i1, j1, k1 = (_cell_of(hi[k, 0], origin, cell, dims, 0), _cell_of(hi[k, 1], origin, cell, dims, 1),
+                      _cell_of(hi[k, 2], origin, cell, dims, 2))
+        for c in range(k0, k1 + 1):
+            for b in range(j0, j1 + 1):
+                for a in range(i0, i1 + 1):
+                    keys[m] = a + dims[0] * (b + dims[1] * c)
+                    items[m] = k
+                    m += 1
+    order = np.argsort(keys, kind="mergesort")
+    keys, items = keys[order], items[order]
+    ptr = np.searchsorted(keys, np.arange(dims[0] * dims[1] * dims[2] + 1))
+    return ptr, items
+
+
+@njit(cache=True, inline="always")
+def _gap2(q_lo, q_hi, i_lo, i_hi):
+    """Squared distance between two boxes."""
+    d2 = 0.0
+    for a in range(3):
+        g = max(i_lo[a] - q_hi[a], 0.0, q_lo[a] - i_hi[a])
+        d2 += g * g
+    return d2
+
+
+@njit(cache=True, inline="always")
+def _owns(q_lo, i_lo, r, a, b, c, origin, cell, dims):
+    """Whether cell (a, b, c) holds the lower corner of the overlap of the grown query box and the item's box."""
+    return (a == _cell_of(max(q_lo[0] - r, i_lo[0]), origin, cell, dims, 0)
+            and b == _cell_of(max(q_lo[1] - r, i_lo[1]), origin, cell, dims, 1)
+            and c == _cell_of(max(q_lo[2] - r, i_lo[2]), origin, cell, dims, 2))
+
+
+@njit(cache=True, inline="always")
+def _neighbours(ring_ptr, ring_idx, p, q):
+    """Whether vertices ``p`` and ``q`` are the same or share an edge (``q`` in ``p``'s CSR row)."""
+    for m in range(ring_ptr[p], ring_ptr[p + 1]):
+        if ring_idx[m] == q:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _shares(p, face):
+    return face[0] == p or face[1] == p or face[2] == p
+
+
+@njit(cache=True)
+def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell, dims,
+            r, exact):
+    """Count (``fill`` False) or write the triangles within ``r`` of active vertex ``q``."""
+    p = verts[q]
+    found = 0
+    r2 = r * r
+    i0, j0, k0 = (_cell_of(v_lo[q, 0] - r, origin, cell, dims, 0), _cell_of(v_lo[q, 1] - r, origin, cell, dims, 1),
+                  _cell_of(v_lo[q, 2] - r, origin, cell, dims, 2))
+    i1, j1, k1 = (_cell_of(v_hi[q, 0] + r, origin, cell, dims, 0), _cell_of(v_hi[q, 1] + r, origin, cell, dims, 1),
+                  _cell_of(v_hi[q, 2] + r, origin, cell, dims, 2))
+    for c in range(k0, k1 + 1):
+        for b in range(j0, j1 + 1):
+            for a in range(i0, i1 + 1):
+                key = a + dims[0] * (b + dims[1] * c)
+                for m in range(ptr[key], ptr[key + 1]):
+                    t = items[m]
+                    f = faces[tris[t]]
+                    if _shares(p, f) or _gap2(v_lo[q], v_hi[q], t_lo[t], t_hi[t]) > r2:
+                        continue
+                    if not _owns(v_lo[q], t_lo[t], r, a, b, c, origin, cell, dims):
+                        continue
+                    if exact:
+                        u, v, w = closest_barycentric(x[p], x[f[0]], x[f[1]], x[f[2]])
+                        d2 = 0.0
+                        for e in range(3):
+                            g = x[p, e] - (u * x[f[0], e] + v * x[f[1], e] + w * x[f[2], e])
+                            d2 += g * g
+                        if d2 > r2:
+                            continue
+                    if fill:
+                        out_v[start + found] = p
+                        out_t[start + found] = tris[t]
+                        out_near[start + found] = (_neighbours(ring_ptr, ring_idx, p, f[0])
+                                                   or _neighbours(ring_ptr, ring_idx, p, f[1])
+                                                   or _neighbours(ring_ptr, ring_idx, p, f[2]))
+                    found += 1
+    return found
+
+
+@njit(cache=True, parallel=True)
+def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx):
+    ptr, items = _bin(t_lo, t_hi, origin, cell, dims)
+    counts = np.zeros(len(verts), np.int64)
+    dummy = np.zeros(0, np.int64)
+    no = np.zeros(0, np.bool_)
+    for q in prange(len(verts)):
+        counts[q] = _vt_one(q, False, dummy, dummy, no, 0, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin,
+                            cell, dims, r, exact)
+    starts = np.zeros(len(verts) + 1, np.int64)
+    starts[1:] = np.cumsum(counts)
+    out_v = np.empty(starts[-1], np.int64)
+    out_t = np.empty(starts[-1], np.int64)
+    out_near = np.empty(starts[-1], np.bool_)
+    for q in prange(len(verts)):
+        _vt_one(q, True, out_v, out_t, out_near, starts[q], ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell,
+                dims, r, exact)
+    return out_v, out_t, out_near
+
+
+def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool):
+    """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
+    ``verts`` against each of the triangles ``tris`` (rows of ``faces``) not at it whose boxes come
+    within ``radius``; ``near``: whether a corner of the triangle is a neighbour of the vertex
+    (``ring`` = (ptr, idx): each vertex's neighbours and itself, CSR).
+
+    ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step; both ``x`` for points).
+    With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``.
+    """
+    verts = np.ascontiguousarray(verts, np.int64)
+    tris = np.ascontiguousarray(tris, np.int64)
+    if not len(verts) or not len(tris):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool)
+    corners_lo, corners_hi = lo[faces[tris]], hi[faces[tris]]
+    t_lo, t_hi = np.ascontiguousarray(corners_lo.min(axis=1)), np.ascontiguousarray(corners_hi.max(axis=1))
+    v_lo, v_hi = np.ascontiguousarray(lo[verts]), np.ascontiguousarray(hi[verts])
+    grid = Grid(np.vstack([t_lo, v_lo - radius]), np.vstack([t_hi, v_hi + radius]), cell)
+    return _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
+                     grid.cell, grid.dims, float(radius), bool(exact), *ring)
+
+
+@njit(cache=True)
+def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r):
+    """Count (``fill`` False) or write the edges after active edge ``q`` within ``r`` of it, sharing no end."""
+    a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
+    found = 0
+    r2 = r * r
+    i0, j0, k0 = (_cell_of(e_lo[q, 0] - r, origin, cell, dims, 0), _cell_of(e_lo[q, 1] - r, origin, cell, dims, 1),
+                  _cell_of(e_lo[q, 2] - r, origin, cell, dims, 2))
+    i1, j1, k1 = (_cell_of(e_hi[q, 0] + r, origin, cell, dims, 0), _cell_of(e_hi[q, 1] + r, origin, cell, dims, 1),
+                  _cell_of(e_hi[q, 2] + r, origin, cell, dims, 2))
+    for c in range(k0, k1 + 1):
+        for b in range(j0, j1 + 1):
+            for a in range(i0, i1 + 1):
+                key = a + dims[0] * (b + dims[1] * c)
+                for m in range(ptr[key], ptr[key + 1]):
+                    s = items[m]
+                    if s <= q:
+                        continue
+                    b0, b1 = edges[ids[s], 0], edges[ids[s], 1]
+                    if a0 == b0 or a0 == b1 or a1 == b0 or a1 == b1:
+                        continue
+                    if _gap2(e_lo[q], e_hi[q], e_lo[s], e_hi[s]) > r2:
+                        continue
+                    if not _owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
+                        continue
+                    if fill:
+                        out[start + found, 0] = a0
+                        out[start + found, 1] = a1
+                        out[start + found, 2] = b0
+                        out[start + found, 3] = b1
+                        out_near[start + found] = (_neighbours(ring_ptr, ring_idx, a0, b0)
+                                                   or _neighbours(ring_ptr, ring_idx, a0, b1)
+                                                   or _neighbours(ring_ptr, ring_idx, a1, b0)
+                                                   or _neighbours(ring_ptr, ring_idx, a1, b1))
+                    found += 1
+    return found
+
+
+@njit(cache=True, parallel=True)
+def _ee_pairs(ids, edges, e_lo, e_hi, origin, cell, dims, r, ring_ptr, ring_idx):
+    ptr, items = _bin(e_lo, e_hi, origin, cell, dims)
+    counts = np.zeros(len(ids), np.int64)
+    dummy = np.zeros((0, 4), np.int64)
+    no = np.zeros(0, np.bool_)
+    for q in prange(len(ids)):
+        counts[q] = _ee_one(q, False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r)
+    starts = np.zeros(len(ids) + 1, np.int64)
+    starts[1:] = np.cumsum(counts)
+    out = np.empty((starts[-1], 4), np.int64)
+    out_near = np.empty(starts[-1], np.bool_)
+    for q in prange(len(ids)):
+        _ee_one(q, True, out, out_near, starts[q], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell,
+                dims, r)
+    return out, out_near
+
+
+def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring):
+    """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
+    share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
+    pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
+    :func:`vertex_triangle_pairs`)."""
+    ids = np.ascontiguousarray(ids, np.int64)
+    if len(ids) < 2:
+        return np.zeros((0, 4), np.int64), np.zeros(0, bool)
+    ends = edges[ids]
+    e_lo = np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]]))
+    e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
+    grid = Grid(e_lo - radius, e_hi + radius, cell)
+    return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, grid.origin, grid.cell, grid.dims,
+                     float(radius), *ring)

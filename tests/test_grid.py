@@ -1,0 +1,74 @@
+"""The compiled grid broad phase (`tailor/collide/grid.py`): exactly the pairs a brute-force check finds, each once."""
+
+import numpy as np
+import pytest
+
+from tailor.collide.closest import closest_barycentric
+from tailor.collide.grid import MAX_CELLS, Grid, edge_edge_pairs, vertex_triangle_pairs
+
+
+def _soup(rng, n=300, faces=400, spread=0.3):
+    x = rng.uniform(0.0, spread, (n, 3))
+    f = np.array([rng.choice(n, 3, replace=False) for _ in range(faces)])
+    lo = x - rng.uniform(0.0, 0.02, (n, 3))  # boxes round each vertex (its motion over a step)
+    hi = x + rng.uniform(0.0, 0.02, (n, 3))
+    return x, f, lo, hi
+
+
+def _gap(lo_a, hi_a, lo_b, hi_b):
+    return np.linalg.norm(np.maximum(0.0, np.maximum(lo_b - hi_a, lo_a - hi_b)))
+
+
+def _ring(n, faces):
+    e = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    keys = np.unique(np.concatenate([e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0], np.arange(n) * (n + 1)]))
+    return np.searchsorted(keys // n, np.arange(n + 1)).astype(np.int64), (keys % n).astype(np.int64), set(keys.tolist())
+
+
+@pytest.mark.parametrize("exact, cell", [(False, 0.03), (True, 0.03), (False, 0.2), (False, 0.004)])
+def test_vertex_triangle_pairs_are_exactly_the_brute_force_ones(exact, cell):
+    rng = np.random.default_rng(3)
+    x, faces, lo, hi = _soup(rng)
+    if exact:
+        lo = hi = x
+    verts, tris, radius = np.arange(0, 300, 2), np.arange(0, 400, 3), 0.025
+    *ring, keys = _ring(len(x), faces)
+    v, t, near = vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius, cell, ring, exact=exact)
+    want = set()
+    for p in verts:
+        for k in tris:
+            f = faces[k]
+            if p in f or _gap(lo[p], hi[p], lo[f].min(0), hi[f].max(0)) > radius:
+                continue
+            if exact and np.linalg.norm(x[p] - np.dot(closest_barycentric(x[p], *x[f]), x[f])) > radius:
+                continue
+            want.add((p, k))
+    got = list(zip(v.tolist(), t.tolist()))
+    assert len(got) == len(set(got)) and set(got) == want and len(want) > 50
+    assert np.array_equal(near, [any(p * len(x) + q in keys for q in faces[k]) for p, k in got])
+
+
+@pytest.mark.parametrize("cell", [0.03, 0.5, 0.004])
+def test_edge_edge_pairs_are_exactly_the_brute_force_ones_each_once(cell):
+    rng = np.random.default_rng(4)
+    x, faces, lo, hi = _soup(rng, faces=200)
+    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    ids, radius = np.arange(0, len(edges), 2), 0.02
+    *ring, keys = _ring(len(x), faces)
+    pairs, near = edge_edge_pairs(ids, edges, lo, hi, radius, cell, ring)
+    want = set()
+    for i, a in enumerate(ids):
+        for b in ids[i + 1:]:
+            ea, eb = edges[a], edges[b]
+            if set(ea) & set(eb):
+                continue
+            if _gap(lo[ea].min(0), hi[ea].max(0), lo[eb].min(0), hi[eb].max(0)) <= radius:
+                want.add(frozenset([tuple(ea), tuple(eb)]))
+    got = [frozenset([tuple(p[:2]), tuple(p[2:])]) for p in pairs.tolist()]
+    assert len(got) == len(set(got)) and set(got) == want and len(want) > 50
+    assert np.array_equal(near, [any(p * len(x) + q in keys for p in r[:2] for q in r[2:]) for r in pairs.tolist()])
+
+
+def test_a_grid_over_a_vast_extent_keeps_to_its_cell_budget():
+    grid = Grid(np.zeros((1, 3)), np.full((1, 3), 100.0), 1e-3)
+    assert np.prod(grid.dims) <= 1.05 * MAX_CELLS  # one cell more per axis at most
