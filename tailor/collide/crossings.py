@@ -15,45 +15,12 @@ import math
 import numpy as np
 from numba import njit
 
+from .grid import Grid, bin_boxes, cell_of
+
 __all__ = ["edge_crossings"]
 
 EPS = 1e-12
 """Relative size below which a segment is taken as parallel to a triangle's plane (no crossing)."""
-
-
-@njit(cache=True, inline="always")
-def _cell_range(lo, hi, origin, cell, dims):
-    i0 = np.empty(3, np.int64)
-    i1 = np.empty(3, np.int64)
-    for e in range(3):
-        i0[e] = min(max(int(math.floor((lo[e] - origin[e]) / cell)), 0), dims[e] - 1)
-        i1[e] = min(max(int(math.floor((hi[e] - origin[e]) / cell)), 0), dims[e] - 1)
-    return i0, i1
-
-
-@njit(cache=True)
-def _bin_triangles(x, faces, origin, cell, dims):
-    """CSR (ptr, tri) of the triangles whose bounding boxes meet each grid cell."""
-    keys = []
-    tris = []
-    for t in range(len(faces)):
-        lo, hi = x[faces[t, 0]].copy(), x[faces[t, 0]].copy()
-        for c in range(1, 3):
-            for e in range(3):
-                lo[e] = min(lo[e], x[faces[t, c], e])
-                hi[e] = max(hi[e], x[faces[t, c], e])
-        i0, i1 = _cell_range(lo, hi, origin, cell, dims)
-        for a in range(i0[0], i1[0] + 1):
-            for b in range(i0[1], i1[1] + 1):
-                for c in range(i0[2], i1[2] + 1):
-                    keys.append(a + dims[0] * (b + dims[1] * c))
-                    tris.append(t)
-    k = np.array(keys, dtype=np.int64)
-    tr = np.array(tris, dtype=np.int64)
-    order = np.argsort(k, kind="mergesort")
-    k, tr = k[order], tr[order]
-    ptr = np.searchsorted(k, np.arange(dims[0] * dims[1] * dims[2] + 1))
-    return ptr, tr
 
 
 @njit(cache=True, inline="always")
@@ -83,16 +50,24 @@ def _crosses(p, q, a, b, c):
 
 @njit(cache=True)
 def _edge_crossings(x, faces, edges, origin, cell, dims):
-    ptr, tri = _bin_triangles(x, faces, origin, cell, dims)
+    t_lo = np.empty((len(faces), 3))
+    t_hi = np.empty((len(faces), 3))
+    for t in range(len(faces)):
+        for e in range(3):
+            t_lo[t, e] = min(x[faces[t, 0], e], x[faces[t, 1], e], x[faces[t, 2], e])
+            t_hi[t, e] = max(x[faces[t, 0], e], x[faces[t, 1], e], x[faces[t, 2], e])
+    ptr, tri = bin_boxes(t_lo, t_hi, origin, cell, dims)
     seen = np.full(len(faces), -1, np.int64)  # the last edge each triangle was tested against
     out = []
     for k in range(len(edges)):
         i, j = edges[k, 0], edges[k, 1]
-        lo, hi = np.minimum(x[i], x[j]), np.maximum(x[i], x[j])
-        i0, i1 = _cell_range(lo, hi, origin, cell, dims)
-        for a in range(i0[0], i1[0] + 1):
-            for b in range(i0[1], i1[1] + 1):
-                for c in range(i0[2], i1[2] + 1):
+        i0, j0, k0 = (cell_of(min(x[i, 0], x[j, 0]), origin, cell, dims, 0), cell_of(min(x[i, 1], x[j, 1]), origin, cell, dims, 1),
+                      cell_of(min(x[i, 2], x[j, 2]), origin, cell, dims, 2))
+        i1, j1, k1 = (cell_of(max(x[i, 0], x[j, 0]), origin, cell, dims, 0), cell_of(max(x[i, 1], x[j, 1]), origin, cell, dims, 1),
+                      cell_of(max(x[i, 2], x[j, 2]), origin, cell, dims, 2))
+        for a in range(i0, i1 + 1):
+            for b in range(j0, j1 + 1):
+                for c in range(k0, k1 + 1):
                     key = a + dims[0] * (b + dims[1] * c)
                     for m in range(ptr[key], ptr[key + 1]):
                         t = tri[m]
@@ -118,12 +93,13 @@ def edge_crossings(vertices, faces) -> np.ndarray:
     if not len(faces):
         return np.zeros((0, 3), np.int64)
     e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edges = np.unique(e, axis=0)
+    n = len(x)
+    keys = np.unique(e[:, 0] * n + e[:, 1])  # one integer per edge: far quicker than rows
+    edges = np.column_stack([keys // n, keys % n])
     length = np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1)
     cell = max(2.0 * float(np.mean(length)), 1e-6)
-    lo = x[np.unique(faces)].min(axis=0)
-    hi = x[np.unique(faces)].max(axis=0)
-    dims = np.minimum(np.floor((hi - lo) / cell).astype(np.int64) + 1, 512)
-    cell = max(cell, float(np.max((hi - lo) / dims)) * (1 + 1e-9))
-    pairs = _edge_crossings(x, faces, edges, lo, cell, dims)
+    used = x[np.unique(edges)]
+    lo, hi = used.min(axis=0), used.max(axis=0)
+    grid = Grid(lo[None], hi[None], cell)
+    pairs = _edge_crossings(x, faces, edges, grid.origin, grid.cell, grid.dims)
     return np.column_stack([edges[pairs[:, 0]], pairs[:, 1]]) if len(pairs) else np.zeros((0, 3), np.int64)

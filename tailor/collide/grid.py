@@ -19,7 +19,7 @@ from numba import njit, prange
 
 from .closest import closest_barycentric
 
-__all__ = ["Grid", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
+__all__ = ["Grid", "bin_boxes", "cell_of", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
 
 MAX_CELLS = 1 << 21
 """Cells a grid holds, about (one more per axis at most: 16 MB of cell pointers); coarser cells beyond."""
@@ -37,27 +37,27 @@ class Grid:
 
 
 @njit(cache=True, inline="always")
-def _cell_of(p, origin, cell, dims, axis):
+def cell_of(p, origin, cell, dims, axis):
     return min(max(int(math.floor((p - origin[axis]) / cell)), 0), dims[axis] - 1)
 
 
 @njit(cache=True)
-def _bin(lo, hi, origin, cell, dims):
+def bin_boxes(lo, hi, origin, cell, dims):
     """CSR (ptr, items) of the boxes (lo[k], hi[k]) meeting each cell."""
     count = 0
     for k in range(len(lo)):
         n = 1
         for a in range(3):
-            n *= _cell_of(hi[k, a], origin, cell, dims, a) - _cell_of(lo[k, a], origin, cell, dims, a) + 1
+            n *= cell_of(hi[k, a], origin, cell, dims, a) - cell_of(lo[k, a], origin, cell, dims, a) + 1
         count += n
     keys = np.empty(count, np.int64)
     items = np.empty(count, np.int64)
     m = 0
     for k in range(len(lo)):
-        i0, j0, k0 = (_cell_of(lo[k, 0], origin, cell, dims, 0), _cell_of(lo[k, 1], origin, cell, dims, 1),
-                      _cell_of(lo[k, 2], origin, cell, dims, 2))
-        i1, j1, k1 = (_cell_of(hi[k, 0], origin, cell, dims, 0), _cell_of(hi[k, 1], origin, cell, dims, 1),
-                      _cell_of(hi[k, 2], origin, cell, dims, 2))
+        i0, j0, k0 = (cell_of(lo[k, 0], origin, cell, dims, 0), cell_of(lo[k, 1], origin, cell, dims, 1),
+                      cell_of(lo[k, 2], origin, cell, dims, 2))
+        i1, j1, k1 = (cell_of(hi[k, 0], origin, cell, dims, 0), cell_of(hi[k, 1], origin, cell, dims, 1),
+                      cell_of(hi[k, 2], origin, cell, dims, 2))
         for c in range(k0, k1 + 1):
             for b in range(j0, j1 + 1):
                 for a in range(i0, i1 + 1):
@@ -83,9 +83,9 @@ def _gap2(q_lo, q_hi, i_lo, i_hi):
 @njit(cache=True, inline="always")
 def _owns(q_lo, i_lo, r, a, b, c, origin, cell, dims):
     """Whether cell (a, b, c) holds the lower corner of the overlap of the grown query box and the item's box."""
-    return (a == _cell_of(max(q_lo[0] - r, i_lo[0]), origin, cell, dims, 0)
-            and b == _cell_of(max(q_lo[1] - r, i_lo[1]), origin, cell, dims, 1)
-            and c == _cell_of(max(q_lo[2] - r, i_lo[2]), origin, cell, dims, 2))
+    return (a == cell_of(max(q_lo[0] - r, i_lo[0]), origin, cell, dims, 0)
+            and b == cell_of(max(q_lo[1] - r, i_lo[1]), origin, cell, dims, 1)
+            and c == cell_of(max(q_lo[2] - r, i_lo[2]), origin, cell, dims, 2))
 
 
 @njit(cache=True, inline="always")
@@ -109,10 +109,10 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
     p = verts[q]
     found = 0
     r2 = r * r
-    i0, j0, k0 = (_cell_of(v_lo[q, 0] - r, origin, cell, dims, 0), _cell_of(v_lo[q, 1] - r, origin, cell, dims, 1),
-                  _cell_of(v_lo[q, 2] - r, origin, cell, dims, 2))
-    i1, j1, k1 = (_cell_of(v_hi[q, 0] + r, origin, cell, dims, 0), _cell_of(v_hi[q, 1] + r, origin, cell, dims, 1),
-                  _cell_of(v_hi[q, 2] + r, origin, cell, dims, 2))
+    i0, j0, k0 = (cell_of(v_lo[q, 0] - r, origin, cell, dims, 0), cell_of(v_lo[q, 1] - r, origin, cell, dims, 1),
+                  cell_of(v_lo[q, 2] - r, origin, cell, dims, 2))
+    i1, j1, k1 = (cell_of(v_hi[q, 0] + r, origin, cell, dims, 0), cell_of(v_hi[q, 1] + r, origin, cell, dims, 1),
+                  cell_of(v_hi[q, 2] + r, origin, cell, dims, 2))
     for c in range(k0, k1 + 1):
         for b in range(j0, j1 + 1):
             for a in range(i0, i1 + 1):
@@ -144,7 +144,7 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
 
 @njit(cache=True, parallel=True)
 def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx):
-    ptr, items = _bin(t_lo, t_hi, origin, cell, dims)
+    ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
     counts = np.zeros(len(verts), np.int64)
     dummy = np.zeros(0, np.int64)
     no = np.zeros(0, np.bool_)
@@ -189,10 +189,10 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     r2 = r * r
-    i0, j0, k0 = (_cell_of(e_lo[q, 0] - r, origin, cell, dims, 0), _cell_of(e_lo[q, 1] - r, origin, cell, dims, 1),
-                  _cell_of(e_lo[q, 2] - r, origin, cell, dims, 2))
-    i1, j1, k1 = (_cell_of(e_hi[q, 0] + r, origin, cell, dims, 0), _cell_of(e_hi[q, 1] + r, origin, cell, dims, 1),
-                  _cell_of(e_hi[q, 2] + r, origin, cell, dims, 2))
+    i0, j0, k0 = (cell_of(e_lo[q, 0] - r, origin, cell, dims, 0), cell_of(e_lo[q, 1] - r, origin, cell, dims, 1),
+                  cell_of(e_lo[q, 2] - r, origin, cell, dims, 2))
+    i1, j1, k1 = (cell_of(e_hi[q, 0] + r, origin, cell, dims, 0), cell_of(e_hi[q, 1] + r, origin, cell, dims, 1),
+                  cell_of(e_hi[q, 2] + r, origin, cell, dims, 2))
     for c in range(k0, k1 + 1):
         for b in range(j0, j1 + 1):
             for a in range(i0, i1 + 1):
@@ -223,7 +223,7 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 @njit(cache=True, parallel=True)
 def _ee_pairs(ids, edges, e_lo, e_hi, origin, cell, dims, r, ring_ptr, ring_idx):
-    ptr, items = _bin(e_lo, e_hi, origin, cell, dims)
+    ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     counts = np.zeros(len(ids), np.int64)
     dummy = np.zeros((0, 4), np.int64)
     no = np.zeros(0, np.bool_)
