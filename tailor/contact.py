@@ -18,7 +18,8 @@ from typing import Protocol
 
 import numpy as np
 
-from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, SelfCollider
+from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, SelfCollider, untangle
+from .collide.untangle import vertex_rings
 from .errors import SimulationError
 
 __all__ = ["ContactPipeline", "ContactSettings", "StaticBody", "Attachments", "LimbWallContact", "BODY_MARGIN",
@@ -163,6 +164,7 @@ class ContactPipeline:
         self._self: SelfCollider | None = None
         self._self_key = None
         self._inv_mass = None
+        self._rings = None  # (numbering, each vertex's neighbours) for untangling
 
     def configure(self, settings: ContactSettings) -> None:
         """What contact does from now on (a new phase)."""
@@ -222,6 +224,23 @@ class ContactPipeline:
             self._self_key = key
             self._inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
         return self._self
+
+    def untangle(self, model, state) -> tuple:
+        """The cloth's edges through its own triangles pushed apart in place (:func:`~tailor.collide.untangle`),
+        then any vertex so pushed into the body freed; (crossings found, crossings left). Nothing
+        is done with self-collision off."""
+        if self.self_mode == "off":
+            return 0, 0
+        key = (model.vertex_count, self._version)
+        if self._rings is None or self._rings[0] != key:
+            self._rings = (key, vertex_rings(model.faces, model.vertex_count))
+        inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
+        found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=self._rings[1])
+        if found:
+            if self._self is not None and self._self_key == key:
+                self._self.moved(state.x)
+            self.rescue(model, state)
+        return found, left
 
     def rescue(self, model, state) -> int:
         """Vertices trapped inside the body go back out (:meth:`BodyCollider.rescue`); how many."""

@@ -138,3 +138,19 @@ def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
     assert speed(cloth, at_rest, frames[0], 0.04, (0.0, 0.04)) == 0.0  # the moving box is out of reach
     assert speed(cloth + [1.0, 0.0, 0.0], at_rest, frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)
     assert speed(cloth, np.full_like(cloth, 30.0), frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)  # fast cloth
+
+
+@pytest.mark.parametrize("garment, resolution, frames", [
+    ("dress", 0.04, 3), ("circle_skirt", 0.04, 3),
+    pytest.param("dress", 0.02, 50, marks=pytest.mark.slow), pytest.param("tshirt", 0.02, 50, marks=pytest.mark.slow),
+    pytest.param("skirt", 0.02, 50, marks=pytest.mark.slow), pytest.param("trousers", 0.02, 50, marks=pytest.mark.slow)])
+def test_walking_garments_do_not_pass_through_themselves(garment, resolution, frames):
+    """Every frame written is free of edges through the garment's own triangles (the check a renderer
+    trips on), untangled where sewing or the walk made some, and nothing enters the body. Without
+    untangling the 2 cm dress kept 96 crossings and the T-shirt 11 (at the armholes), the 4 cm
+    circle skirt 155–164 (a fold at the hem); the circle skirt keeps a knot of 4 there."""
+    result = drape(read_pattern(PANELS / f"{garment}.json"), read_body("mannequin-walk"), frames=frames,
+                   resolution=resolution)
+    allowed = 4 if garment == "circle_skirt" else 0
+    assert max(result.report.crossings_per_frame) <= allowed
+    assert result.report.max_penetration_m <= 0.001

@@ -335,6 +335,12 @@ class SelfCollider:
             resolve_contacts(x, v, im, all_i, all_a, all_n, all_h, dt, self.friction, sweeps)
         return np.union1d(keys, seen)
 
+    def moved(self, x) -> None:
+        """Positions were changed between steps (untangled): they are the sides to keep from now on,
+        and the candidates are found again at the next step."""
+        self._x_prev = np.array(x, float)
+        self._anchor = None
+
     def carry_stats(self, stats: dict) -> None:
         """Continue the counters of a collider this one replaces (welding renumbered the cloth)."""
         for k, v in stats.items():

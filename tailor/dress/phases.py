@@ -4,6 +4,8 @@
    and pairs merge (Eq. 16–18) until every seam is closed, or a time-out raises
    :class:`~tailor.errors.SimulationError` naming the widest open seam;
 2. :func:`settle` — gravity on, attachments hold (Eq. 19–20), the garment comes to rest;
+   from here on (and at every weld) the cloth's crossings through itself are untangled every frame
+   (:meth:`~tailor.contact.ContactPipeline.untangle`);
 3. :func:`transition` — a body dressed in its neutral pose moves into its motion's first frame;
 4. :func:`animate` — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
 
@@ -16,7 +18,6 @@ import time
 
 import numpy as np
 
-from ..collide import edge_crossings
 from ..contact import LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
@@ -99,6 +100,7 @@ class Dressing:
         self.contacts.follow(self.garment.friction)
         self.constrain()
         self.contacts.rescue(self.garment.model, state)
+        self.contacts.untangle(self.garment.model, state)  # a merge can fold a seam corner through its neighbour
         return state
 
     def change(self, state, due: list):
@@ -173,6 +175,7 @@ def settle(d: Dressing, state):
     count = int(round(d.options.settle * d.options.fps))
     for i in range(count):
         state = d.advance(state, d.frame_dt)
+        d.contacts.untangle(d.garment.model, state)
         if d.options.record_sewing:
             d.emit(state, d.timeline.pose)
         d.tell(i + 1, count, state)
@@ -190,6 +193,7 @@ def transition(d: Dressing, state):
     count = int(round(TRANSITION_S * d.options.fps))
     for i in range(count):
         state = d.advance(state, d.frame_dt)
+        d.contacts.untangle(d.garment.model, state)
         if d.options.record_sewing:
             d.emit(state, d.timeline.at(state.t)[0])
         d.tell(i + 1, count, state)
@@ -200,8 +204,9 @@ def animate(d: Dressing, state):
     """Phase 4: the body moves; ``frames`` frames, one every 1/fps s (frame 0: the dressed garment).
 
     With cuts or tearing the garment may change between steps: the frame's steps are taken one
-    at a time (a crack runs on from step to step, with any integrator). Returns (state, report, per-frame penetration
-    [m], per-frame self-intersecting triangle pairs)."""
+    at a time (a crack runs on from step to step, with any integrator). Each frame's crossings of the
+    cloth through itself are untangled before it is written. Returns (state, report, per-frame
+    penetration [m], per-frame crossings left: edges through a triangle of the garment)."""
     t0 = time.perf_counter()
     opts, tl = d.options, d.timeline
     tl.start_motion(state.t)
@@ -213,7 +218,7 @@ def animate(d: Dressing, state):
         d.garment.allow_changes(opts.tear)
     step = tl.motion_step
     sub = d.stepper.substeps(d.garment.model, d.frame_dt, step)[1]  # the steps of a frame (explicit: Eq. 24's)
-    penetration, crossings = [], []
+    penetration, crossings, untangled = [], [], []
     for f in range(opts.frames):
         if f and not changing:
             state = d.advance(state, d.frame_dt)
@@ -223,12 +228,15 @@ def animate(d: Dressing, state):
             d.contacts.rescue(d.garment.model, state)
         elif changing:
             state = d.change(state, due)
+        found, left = d.contacts.untangle(d.garment.model, state)  # the cloth through itself, pushed back
         penetration.append(d.contacts.penetration(state.x, state.t))
-        crossings.append(len(edge_crossings(state.x, d.garment.model.faces)))  # the cloth through itself
+        crossings.append(left)
+        untangled.append(found - left)
         d.emit(state, tl.at(state.t)[0])
         d.tell(f + 1, opts.frames, state)
     used = tl.steps_used
     report = PhaseReport((opts.frames - 1) / opts.fps, time.perf_counter() - t0, opts.frames,
                          {"time_step_s": step, "time_step_still_s": tl.still_step, "body_max_speed_m_s": tl.max_speed,
-                          "time_step_near_s": [min(used), max(used)] if used else None})
+                          "time_step_near_s": [min(used), max(used)] if used else None,
+                         "untangled_per_frame": untangled})
     return state, report, penetration, crossings

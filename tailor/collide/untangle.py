@@ -1,0 +1,108 @@
+"""Cloth already through cloth, pushed back: a local untangling of edge–triangle crossings.
+
+The self-collision response (Carignan Eq. 5–8) keeps cloth from crossing itself by judging each
+pair by the side it was on at the last step; a crossing that arrives anyway (seams merged round
+an armhole corner, a vertex squeezed through by two seams at once) is then kept, step after step,
+because its history says it belongs there. Here every crossing the independent check
+(:func:`~tailor.collide.crossings.edge_crossings`) finds is undone from the geometry alone, in the
+spirit of Baraff, Witkin & Kass (2003, "Untangling cloth") but locally: an end of the crossing edge
+poked through when its own neighbourhood (its 1-ring, less the edge's other end and the triangle)
+lies on the other side of the triangle's plane. Where exactly one end did, that end and the triangle
+are moved apart along the triangle's normal until the end is ``thickness`` on its ring's side,
+in proportion to their inverse masses (the pair's centre of mass stays put; pinned and attached
+vertices, inverse mass 0, do not move), never by more than half the crossing edge; a crossing where
+both ends or neither poked (two sheets cut through each other, a fold through itself) waits for
+the pokes round it. Moves are
+averaged per vertex (Jacobi) and the check runs again, a few rounds at most; a round that does not
+lower the number of crossings is undone and ends the call, so untangling never makes a tangle worse
+(a knot these local moves cannot undo stays). Velocities are left alone: the next self-collision
+pass, told the new positions, takes them as the sides to keep.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .crossings import edge_crossings
+
+__all__ = ["untangle", "vertex_rings", "UNTANGLE_ROUNDS"]
+
+UNTANGLE_ROUNDS = 4
+"""Rounds of check and push per call: a poke-through takes one, a fold crossed over two or three."""
+
+
+def vertex_rings(faces, n: int):
+    """CSR (ptr, idx) of each vertex's neighbours across an edge of ``faces``."""
+    e = np.asarray(faces, np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    keys = np.unique(np.concatenate([e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0]]))
+    return np.searchsorted(keys // n, np.arange(n + 1)).astype(np.int64), (keys % n).astype(np.int64)
+
+
+def _ring_sums(x, rings, ends, other, tri, point, normal):
+    """Per crossing, the summed signed distance from the triangle's plane of the 1-ring of ``ends``
+    (the edge's other end and the triangle's corners left out)."""
+    ptr, idx = rings
+    deg = ptr[ends + 1] - ptr[ends]
+    rows = np.repeat(np.arange(len(ends)), deg)
+    nb = idx[np.repeat(ptr[ends], deg) + np.arange(int(deg.sum())) - np.repeat(np.cumsum(deg) - deg, deg)]
+    keep = (nb != other[rows]) & (nb != tri[rows, 0]) & (nb != tri[rows, 1]) & (nb != tri[rows, 2])
+    d = np.einsum("ij,ij->i", x[nb] - point[rows], normal[rows]) * keep
+    return np.bincount(rows, d, minlength=len(ends))
+
+
+def _push(x, inv_mass, faces, crossings, rings, thickness):
+    """One Jacobi round: each crossing's poking end and its triangle moved apart (module docstring)."""
+    i, j, t = crossings.T
+    tri = faces[t]
+    a, b, c = x[tri[:, 0]], x[tri[:, 1]], x[tri[:, 2]]
+    normal = np.cross(b - a, c - a)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    point = (a + b + c) / 3.0
+    s_i = np.einsum("ij,ij->i", x[i] - point, normal)
+    s_j = np.einsum("ij,ij->i", x[j] - point, normal)
+    # an end poked through when its own neighbourhood lies on the other side of the plane; where
+    # both or neither do, the crossing is no poke (two sheets cut through each other) and waits
+    alone_i = np.sign(_ring_sums(x, rings, i, j, tri, point, normal)) == -np.sign(s_i)
+    poke = alone_i != (np.sign(_ring_sums(x, rings, j, i, tri, point, normal)) == -np.sign(s_j))
+    i, j, tri, normal, s_i, s_j, alone_i = i[poke], j[poke], tri[poke], normal[poke], s_i[poke], s_j[poke], alone_i[poke]
+    k = np.where(alone_i, i, j)
+    s_k = np.where(alone_i, s_i, s_j)
+    depth = -np.sign(s_k) * thickness - s_k  # along the normal: the end to ``thickness`` on its ring's side
+    reach = 0.5 * np.linalg.norm(x[i] - x[j], axis=1)  # a push never carries a vertex past half its edge
+    depth = np.clip(depth, -reach, reach)
+    im_k, im_t = inv_mass[k], inv_mass[tri].mean(axis=1)
+    total = im_k + im_t
+    share = np.divide(im_k, total, out=np.zeros_like(total), where=total > 0)
+    move = np.zeros_like(x)
+    count = np.zeros(len(x))
+    np.add.at(move, k, (share * depth)[:, None] * normal)
+    np.add.at(count, k, 1.0)
+    back = np.where(total > 0, (1.0 - share) * depth, 0.0)
+    for corner in range(3):
+        np.add.at(move, tri[:, corner], -back[:, None] * normal * (inv_mass[tri[:, corner]] > 0)[:, None])
+        np.add.at(count, tri[:, corner], 1.0)
+    x += move / np.maximum(count, 1.0)[:, None]
+
+
+def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROUNDS, rings=None):
+    """Push apart, in place, the edges of ``faces`` that pass through their own triangles at ``x``.
+
+    ``inv_mass`` (N,) is 1/m per vertex (0: pinned or attached). Returns (crossings found, crossings
+    left): both from :func:`~tailor.collide.crossings.edge_crossings`, before the first and after the
+    last round.
+    """
+    faces = np.asarray(faces, np.int64)
+    rings = vertex_rings(faces, len(x)) if rings is None else rings
+    crossings = edge_crossings(x, faces)
+    found = len(crossings)
+    for _ in range(rounds):
+        if not len(crossings):
+            break
+        y = x.copy()
+        _push(y, np.asarray(inv_mass, float), faces, crossings, rings, thickness)
+        after = edge_crossings(y, faces)
+        if len(after) >= len(crossings):  # a tangle these local pushes make no better: left as it is
+            break
+        x[:] = y
+        crossings = after
+    return found, len(crossings)

@@ -1,0 +1,84 @@
+"""Untangling (`tailor/collide/untangle.py`): a vertex poked through cloth goes back to its own side,
+pinned cloth stays, and a tangle the local pushes cannot improve is left exactly as it was."""
+
+import numpy as np
+import pytest
+
+from tailor.collide import edge_crossings, untangle
+from tailor.scenes import grid
+
+
+def _two_sheets(poke):
+    """A 5 × 5 sheet 2 mm above a 5 × 5 sheet, vertex 12 (the upper one's centre) pushed ``poke`` m down."""
+    mesh = grid(0.08, 0.08, 5)
+    flat = np.c_[mesh.uv - 0.04, np.zeros(mesh.vertex_count)]
+    lower = flat + [0.003, 0.004, 0.0]  # offset: the poked vertex meets a triangle's interior
+    upper = flat + [0.0, 0.0, 0.002]
+    upper[12, 2] -= poke
+    x = np.vstack([lower, upper])
+    faces = np.vstack([mesh.faces, mesh.faces + mesh.vertex_count])
+    return x, faces
+
+
+def test_a_vertex_poked_through_a_sheet_goes_back_to_its_own_side():
+    x, faces = _two_sheets(0.006)  # 4 mm below the lower sheet
+    assert len(edge_crossings(x, faces)) > 0
+    before = x.copy()
+    found, left = untangle(x, faces, np.ones(len(x)), 0.001)
+    assert found > 0 and left == 0 and len(edge_crossings(x, faces)) == 0
+    assert x[25 + 12, 2] > x[12, 2]  # the poked vertex above the lower sheet's centre again
+    assert np.linalg.norm(x - before, axis=1).max() < 0.006  # a nudge, not a jump
+
+
+def test_pinned_vertices_stay_and_the_free_side_takes_the_whole_push():
+    x, faces = _two_sheets(0.006)
+    inv_mass = np.r_[np.zeros(25), np.ones(25)]  # the lower sheet pinned
+    before = x.copy()
+    found, left = untangle(x, faces, inv_mass, 0.001)
+    assert found > 0 and left == 0
+    assert np.array_equal(x[:25], before[:25])
+    assert x[25 + 12, 2] == pytest.approx(0.001)  # the whole push: thickness above the pinned sheet
+
+
+def test_a_tangle_local_pushes_cannot_improve_is_left_exactly_as_it_was():
+    # a sheet straight through another, edge-on: half of it on each side, no side to push to
+    mesh = grid(0.1, 0.1, 6)
+    a = np.c_[mesh.uv - 0.05, np.zeros(mesh.vertex_count)]
+    b = np.c_[mesh.uv[:, 0] - 0.05 + 0.004, np.full(mesh.vertex_count, 0.003), mesh.uv[:, 1] - 0.05]  # upright
+    x = np.vstack([a, b])
+    faces = np.vstack([mesh.faces, mesh.faces + mesh.vertex_count])
+    count = len(edge_crossings(x, faces))
+    assert count > 0
+    before = x.copy()
+    found, left = untangle(x, faces, np.ones(len(x)), 0.001)
+    assert found == left == count  # every crossing has a poked end on each side, or none: no push is tried
+    assert np.array_equal(x, before)
+
+
+def test_the_contact_pipeline_untangles_and_self_collision_then_keeps_the_new_sides():
+    # two 10 cm squares 3 mm apart, a vertex of the upper one 4 mm through the lower one for a step:
+    # untangled, the self-collision pass must take the new sides as the ones to keep, not push back
+    from tailor.contact import ContactPipeline
+    from tailor.integrators import make_integrator
+    from tailor.scenes import cloth_model, rectangle
+    from tailor.sim import Stepper
+
+    mesh, model = cloth_model([rectangle(0.1, 0.1, "lower"), rectangle(0.1, 0.1, "upper")], "cotton", 0.02,
+                              air_density=0.0)
+    upper = np.asarray(mesh.vertex_panel) == 1
+    x = np.c_[model.rest_uv - model.rest_uv.mean(axis=0), np.zeros(model.vertex_count)]
+    x[upper] += [0.003, 0.004, 0.003]
+    inner = np.flatnonzero(upper)[np.argmin(np.linalg.norm(x[upper, :2] - [0.003, 0.004], axis=1))]
+    x[inner, 2] = -0.004
+    pipe = ContactPipeline(None, None, thickness=0.001, friction=0.4, self_collision="on")
+    stepper = Stepper(make_integrator("implicit"), contacts=pipe, forces=lambda m, s: np.zeros_like(s.x))
+    state = stepper.step(model, model.state(x), 0.005)  # the self-collision pass learns the crossed sides
+    assert len(edge_crossings(state.x, model.faces))
+    found, left = pipe.untangle(model, state)
+    assert found > 0 and left == 0
+    for _ in range(5):
+        state = stepper.step(model, state, 0.005)
+        assert len(edge_crossings(state.x, model.faces)) == 0
+    lower = np.flatnonzero(~upper)
+    below = lower[np.argsort(np.linalg.norm(state.x[lower, :2] - state.x[inner, :2], axis=1))[:3]]
+    assert np.all(state.x[inner, 2] > state.x[below, 2])  # above the lower sheet where it is, it stays
