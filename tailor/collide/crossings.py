@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .grid import Grid, bin_boxes, cell_of
+from .grid import Grid, bin_boxes, cell_span
 
 __all__ = ["edge_crossings"]
 
@@ -57,14 +57,13 @@ def _edge_crossings(x, faces, edges, origin, cell, dims):
             t_lo[t, e] = min(x[faces[t, 0], e], x[faces[t, 1], e], x[faces[t, 2], e])
             t_hi[t, e] = max(x[faces[t, 0], e], x[faces[t, 1], e], x[faces[t, 2], e])
     ptr, tri = bin_boxes(t_lo, t_hi, origin, cell, dims)
+    e_lo = np.minimum(x[edges[:, 0]], x[edges[:, 1]])
+    e_hi = np.maximum(x[edges[:, 0]], x[edges[:, 1]])
     seen = np.full(len(faces), -1, np.int64)  # the last edge each triangle was tested against
     out = []
     for k in range(len(edges)):
         i, j = edges[k, 0], edges[k, 1]
-        i0, j0, k0 = (cell_of(min(x[i, 0], x[j, 0]), origin, cell, dims, 0), cell_of(min(x[i, 1], x[j, 1]), origin, cell, dims, 1),
-                      cell_of(min(x[i, 2], x[j, 2]), origin, cell, dims, 2))
-        i1, j1, k1 = (cell_of(max(x[i, 0], x[j, 0]), origin, cell, dims, 0), cell_of(max(x[i, 1], x[j, 1]), origin, cell, dims, 1),
-                      cell_of(max(x[i, 2], x[j, 2]), origin, cell, dims, 2))
+        i0, j0, k0, i1, j1, k1 = cell_span(e_lo[k], e_hi[k], 0.0, origin, cell, dims)
         for a in range(i0, i1 + 1):
             for b in range(j0, j1 + 1):
                 for c in range(k0, k1 + 1):

@@ -19,7 +19,7 @@ from numba import njit, prange
 
 from .closest import closest_barycentric
 
-__all__ = ["Grid", "bin_boxes", "cell_of", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
+__all__ = ["Grid", "bin_boxes", "cell_of", "cell_span", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
 
 MAX_CELLS = 1 << 21
 """Cells a grid holds, about (one more per axis at most: 16 MB of cell pointers); coarser cells beyond."""
@@ -41,23 +41,26 @@ def cell_of(p, origin, cell, dims, axis):
     return min(max(int(math.floor((p - origin[axis]) / cell)), 0), dims[axis] - 1)
 
 
+@njit(cache=True, inline="always")
+def cell_span(lo, hi, r, origin, cell, dims):
+    """(i0, j0, k0, i1, j1, k1): the first and last cell along each axis of the box (lo, hi) grown by ``r``."""
+    return (cell_of(lo[0] - r, origin, cell, dims, 0), cell_of(lo[1] - r, origin, cell, dims, 1),
+            cell_of(lo[2] - r, origin, cell, dims, 2), cell_of(hi[0] + r, origin, cell, dims, 0),
+            cell_of(hi[1] + r, origin, cell, dims, 1), cell_of(hi[2] + r, origin, cell, dims, 2))
+
+
 @njit(cache=True)
 def bin_boxes(lo, hi, origin, cell, dims):
     """CSR (ptr, items) of the boxes (lo[k], hi[k]) meeting each cell."""
     count = 0
     for k in range(len(lo)):
-        n = 1
-        for a in range(3):
-            n *= cell_of(hi[k, a], origin, cell, dims, a) - cell_of(lo[k, a], origin, cell, dims, a) + 1
-        count += n
+        i0, j0, k0, i1, j1, k1 = cell_span(lo[k], hi[k], 0.0, origin, cell, dims)
+        count += (i1 - i0 + 1) * (j1 - j0 + 1) * (k1 - k0 + 1)
     keys = np.empty(count, np.int64)
     items = np.empty(count, np.int64)
     m = 0
     for k in range(len(lo)):
-        i0, j0, k0 = (cell_of(lo[k, 0], origin, cell, dims, 0), cell_of(lo[k, 1], origin, cell, dims, 1),
-                      cell_of(lo[k, 2], origin, cell, dims, 2))
-        i1, j1, k1 = (cell_of(hi[k, 0], origin, cell, dims, 0), cell_of(hi[k, 1], origin, cell, dims, 1),
-                      cell_of(hi[k, 2], origin, cell, dims, 2))
+        i0, j0, k0, i1, j1, k1 = cell_span(lo[k], hi[k], 0.0, origin, cell, dims)
         for c in range(k0, k1 + 1):
             for b in range(j0, j1 + 1):
                 for a in range(i0, i1 + 1):
@@ -109,10 +112,7 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
     p = verts[q]
     found = 0
     r2 = r * r
-    i0, j0, k0 = (cell_of(v_lo[q, 0] - r, origin, cell, dims, 0), cell_of(v_lo[q, 1] - r, origin, cell, dims, 1),
-                  cell_of(v_lo[q, 2] - r, origin, cell, dims, 2))
-    i1, j1, k1 = (cell_of(v_hi[q, 0] + r, origin, cell, dims, 0), cell_of(v_hi[q, 1] + r, origin, cell, dims, 1),
-                  cell_of(v_hi[q, 2] + r, origin, cell, dims, 2))
+    i0, j0, k0, i1, j1, k1 = cell_span(v_lo[q], v_hi[q], r, origin, cell, dims)
     for c in range(k0, k1 + 1):
         for b in range(j0, j1 + 1):
             for a in range(i0, i1 + 1):
@@ -189,10 +189,7 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     r2 = r * r
-    i0, j0, k0 = (cell_of(e_lo[q, 0] - r, origin, cell, dims, 0), cell_of(e_lo[q, 1] - r, origin, cell, dims, 1),
-                  cell_of(e_lo[q, 2] - r, origin, cell, dims, 2))
-    i1, j1, k1 = (cell_of(e_hi[q, 0] + r, origin, cell, dims, 0), cell_of(e_hi[q, 1] + r, origin, cell, dims, 1),
-                  cell_of(e_hi[q, 2] + r, origin, cell, dims, 2))
+    i0, j0, k0, i1, j1, k1 = cell_span(e_lo[q], e_hi[q], r, origin, cell, dims)
     for c in range(k0, k1 + 1):
         for b in range(j0, j1 + 1):
             for a in range(i0, i1 + 1):
