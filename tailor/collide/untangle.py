@@ -5,18 +5,18 @@ pair by the side it was on at the last step; a crossing that arrives anyway (sea
 an armhole corner, a vertex squeezed through by two seams at once) is then kept, step after step,
 because its history says it belongs there. Here every crossing the independent check
 (:func:`~tailor.collide.crossings.edge_crossings`) finds is undone from the geometry alone, in the
-spirit of Baraff, Witkin & Kass (2003, "Untangling cloth") but locally: an end of the crossing edge
-poked through when its own neighbourhood (its 1-ring, less the edge's other end and the triangle)
-lies on the other side of the triangle's plane. Where exactly one end did, that end and the triangle
-are moved apart along the triangle's normal until the end is ``thickness`` on its ring's side,
-in proportion to their inverse masses (the pair's centre of mass stays put; pinned and attached
-vertices, inverse mass 0, do not move), never by more than half the crossing edge; a crossing where
-both ends or neither poked (two sheets cut through each other, a fold through itself) waits for
-the pokes round it. Moves are
-averaged per vertex (Jacobi) and the check runs again, a few rounds at most; a round that does not
-lower the number of crossings is undone and ends the call, so untangling never makes a tangle worse
-(a knot these local moves cannot undo stays). Velocities are left alone: the next self-collision
-pass, told the new positions, takes them as the sides to keep.
+spirit of Baraff, Witkin & Kass (2003, "Untangling cloth") but locally: the crossing edge's surface
+lies on the side of the triangle's plane where the neighbourhoods of its two ends (their 1-rings,
+less the edge and the triangle) lie together; the end on the other side poked through. That end
+and the triangle are moved apart along the triangle's normal until the end is ``thickness`` on its
+surface's side, in proportion to their inverse masses (pinned and attached vertices, inverse mass
+0, do not move), never by more than half the crossing edge. When such a round makes no progress
+(a pinned sheet's edges through a free one, whose sides their joint neighbourhood cannot tell),
+only the clear pokes are pushed: an end whose own 1-ring lies on the other side, the other end's
+not. Moves are averaged per vertex (Jacobi) and the check runs again, a few rounds at most; a
+round that does not lower the number of crossings is undone and ends the call, so untangling never
+makes a tangle worse (a knot these local moves cannot undo stays). Velocities are left alone: the
+next self-collision pass, told the new positions, takes them as the sides to keep.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def _ring_sums(x, rings, ends, other, tri, point, normal):
     return np.bincount(rows, d, minlength=len(ends))
 
 
-def _push(x, inv_mass, faces, crossings, rings, thickness):
+def _push(x, inv_mass, faces, crossings, rings, thickness, joint):
     """One Jacobi round: each crossing's poking end and its triangle moved apart (module docstring)."""
     i, j, t = crossings.T
     tri = faces[t]
@@ -61,9 +61,18 @@ def _push(x, inv_mass, faces, crossings, rings, thickness):
     s_i = np.einsum("ij,ij->i", x[i] - point, normal)
     s_j = np.einsum("ij,ij->i", x[j] - point, normal)
     # an end poked through when its own neighbourhood lies on the other side of the plane; where
-    # both or neither do, the crossing is no poke (two sheets cut through each other) and waits
-    alone_i = np.sign(_ring_sums(x, rings, i, j, tri, point, normal)) == -np.sign(s_i)
-    poke = alone_i != (np.sign(_ring_sums(x, rings, j, i, tri, point, normal)) == -np.sign(s_j))
+    # both or neither do, the crossing is no poke (two sheets cut through each other) and waits,
+    # unless ``joint``: then the end on the other side from both ends' neighbourhoods together
+    ring_i = _ring_sums(x, rings, i, j, tri, point, normal)
+    ring_j = _ring_sums(x, rings, j, i, tri, point, normal)
+    if joint:
+        side = np.sign(ring_i + ring_j)
+        side = np.where(side == 0, np.where(s_i + s_j >= 0, 1.0, -1.0), side)
+        alone_i = np.sign(s_i) != side
+        poke = np.ones(len(i), bool)
+    else:
+        alone_i = np.sign(ring_i) == -np.sign(s_i)
+        poke = alone_i != (np.sign(ring_j) == -np.sign(s_j))
     i, j, tri, normal, s_i, s_j, alone_i = i[poke], j[poke], tri[poke], normal[poke], s_i[poke], s_j[poke], alone_i[poke]
     k = np.where(alone_i, i, j)
     s_k = np.where(alone_i, s_i, s_j)
@@ -98,9 +107,12 @@ def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROU
     for _ in range(rounds):
         if not len(crossings):
             break
-        y = x.copy()
-        _push(y, np.asarray(inv_mass, float), faces, crossings, rings, thickness)
-        after = edge_crossings(y, faces)
+        for joint in (True, False):  # every crossing by both ends' side; only the clear pokes when that is stuck
+            y = x.copy()
+            _push(y, np.asarray(inv_mass, float), faces, crossings, rings, thickness, joint)
+            after = edge_crossings(y, faces)
+            if len(after) < len(crossings):
+                break
         if len(after) >= len(crossings):  # a tangle these local pushes make no better: left as it is
             break
         x[:] = y
