@@ -64,9 +64,6 @@ __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 SELF_COLLISION_MODES = ("auto", "on", "off")
 FOLDED_COS = 0.5
 """A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
-SELF_CELL = 0.1
-"""Side [m] of the cubes the self-collision broad phase bins the cloth into: fewer cluster pairs (one
-Python object each) than the body's 6 cm (docs/measurements.md)."""
 GRID_EDGES = 2.0
 """Side of the broad phase's grid cells, in mean edge lengths of the cloth."""
 MAX_SUBSTEPS = 16
@@ -96,13 +93,10 @@ class SelfCollider:
         Cloth-on-cloth Coulomb coefficient for the sliding part (``inf``: Carignan's full Eq. 7).
     edges : bool
         Also check edge–edge pairs (:func:`detect_ee`); off, only vertex–triangle pairs.
-    cell : float
-        Side [m] of the cubes the broad phase clusters vertices and triangles into
-        (:data:`SELF_CELL`).
     """
 
     def __init__(self, faces, face_group, x, *, thickness: float, margin: float = 0.01, mode: str = "auto",
-                 patch: float = 0.1, friction: float = 0.4, edges: bool = True, cell: float = SELF_CELL):
+                 patch: float = 0.1, friction: float = 0.4, edges: bool = True):
         if mode not in ("auto", "on"):
             raise ValueError(f"self-collision mode must be 'auto' or 'on', got {mode!r}")
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
@@ -111,7 +105,6 @@ class SelfCollider:
         self.margin = float(margin)
         self.friction = float(friction)
         self.edges = bool(edges)
-        self.cell = float(cell)
         self.mode = mode
         self._patches(np.asarray(face_group), np.asarray(x, float), patch)
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
@@ -119,16 +112,11 @@ class SelfCollider:
                                                np.arange(self.n) * (self.n + 1)]))  # sorted keys p·N + q
         self._ring_csr = (np.searchsorted(self._ring // self.n, np.arange(self.n + 1)).astype(np.int64),
                           (self._ring % self.n).astype(np.int64))  # each vertex's neighbours and itself
-        # undirected edges, each vertex's edges (CSR) and each face's edges, for edge–edge pairs
-        und = np.sort(e, axis=1)
-        self._edges, face_edge = np.unique(und, axis=0, return_inverse=True)
+        # undirected edges and each face's edges, for edge–edge pairs
+        self._edges, face_edge = np.unique(np.sort(e, axis=1), axis=0, return_inverse=True)
         self._face_edges = face_edge.reshape(-1, 3).astype(np.int64)
-        ends = self._edges.ravel()
-        order = np.argsort(ends, kind="stable")
-        self._ve_idx = (order // 2).astype(np.int64)
-        self._ve_ptr = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=self.n))]).astype(np.int64)
         length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
-        self._grid_cell = GRID_EDGES * float(np.mean(length)) if len(length) else self.cell
+        self._grid_cell = GRID_EDGES * float(np.mean(length)) if len(length) else 1.0
         self._ee = np.zeros((0, 4), np.int64)
         self._anchor = None  # positions relative to the centroid at the last query
         self._reach = self.margin  # how deep a pair may have crossed in a step (the narrow phase cut-off beyond thickness)
