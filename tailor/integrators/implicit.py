@@ -221,23 +221,30 @@ class ImplicitEuler(IntegratorBase):
         self.counters.slipped += int(slip.sum())
         return True
 
-    def _landing(self, model, state, dt, dv, held, let_go, predict):
-        """``held`` with the contacts the solved step would make (not ones let go this step: released
-        for a pull, then predicted to land as its neighbours settle, it would cycle)."""
+    def _new_landings(self, model, state, dt, dv, held, let_go, predict):
+        """(contacts, which of them are new): those the solved step would make, less the ones held, the
+        ones let go this step (released for a pull, then predicted to land as its neighbours settle,
+        one would cycle) and pinned vertices; (None, None) if there are none."""
         n = model.vertex_count
         v1 = state.v + dv.reshape(n, 3)
         more = predict(model, state, state.x + dt * v1, v1, dt, held.ids)
         if more is None or not len(more.ids):
-            return held, False
+            return None, None
         new = ~np.isin(more.ids, held.ids) & ~np.isin(more.ids, let_go) & ~model.vertex_pinned[more.ids]
-        if not new.any():
+        return (more, new) if new.any() else (None, None)
+
+    def _landing(self, model, state, dt, dv, held, let_go, predict):
+        """``held`` with the new contacts the solved step would make, and whether there were any."""
+        more, new = self._new_landings(model, state, dt, dv, held, let_go, predict)
+        if more is None:
             return held, False
         self.counters.predicted += int(new.sum())
         return held.join(_Held.of(more, new)), True
 
     def _active_set(self, model, state, dt, system, dv, held, predict):
         """A few passes at most: release pulled contacts, slide slipping ones, hold landing ones,
-        solving again after each change. Returns (held, iterations, converged)."""
+        solving again after each change. Returns (held, iterations, converged, settled: no vertex
+        still landing after the last pass)."""
         v = state.v.reshape(-1)
         let_go = np.zeros(0, np.intp)
         iterations, converged = 0, True
@@ -256,17 +263,9 @@ class ImplicitEuler(IntegratorBase):
                 return held, iterations, converged, True
             extra, converged = self._solve(system, dv, v, held)
             iterations += extra
-        settled = predict is None or not converged or not self._lands(model, state, dt, dv, held, let_go, predict)
+        settled = (predict is None or not converged
+                   or self._new_landings(model, state, dt, dv, held, let_go, predict)[0] is None)
         return held, iterations, converged, settled
-
-    def _lands(self, model, state, dt, dv, held, let_go, predict) -> bool:
-        """Whether the solved step would still bring vertices onto the body that it does not hold."""
-        n = model.vertex_count
-        v1 = state.v + dv.reshape(n, 3)
-        more = predict(model, state, state.x + dt * v1, v1, dt, held.ids)
-        if more is None or not len(more.ids):
-            return False
-        return bool((~np.isin(more.ids, held.ids) & ~np.isin(more.ids, let_go) & ~model.vertex_pinned[more.ids]).any())
 
     def _halves(self, model, state, dt, forces, contacts, predict, depth):
         """The step taken as two half steps, each holding the contacts this one was given."""
