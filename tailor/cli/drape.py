@@ -72,7 +72,8 @@ def _cmd_drape(args) -> int:
     if max(crossings, default=0):
         worst = max(range(len(crossings)), key=crossings.__getitem__)
         print(f"tailor: warning: cloth passes through cloth: {sum(c > 0 for c in crossings)} of {len(crossings)} frames "
-              f"have edges through triangles (most: {crossings[worst]} in frame {worst}; report.json crossings_per_frame)",
+              f"have edges through triangles that untangling could not undo (most: {crossings[worst]} in frame {worst}; "
+              f"report.json crossings_per_frame)",
               file=sys.stderr)
     return 0
 
