@@ -57,7 +57,7 @@ import scipy.sparse as sp
 from ..errors import SimulationUnstable
 from .broad import boxes, corner_bounds, manager_contacts
 from .cloth_kernels import PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts, unique_ints
-from .grid import edge_edge_pairs, vertex_triangle_pairs
+from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
 
@@ -108,10 +108,7 @@ class SelfCollider:
         self.mode = mode
         self._patches(np.asarray(face_group), np.asarray(x, float), patch)
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-        self._ring = np.unique(np.concatenate([e[:, 0] * self.n + e[:, 1], e[:, 1] * self.n + e[:, 0],
-                                               np.arange(self.n) * (self.n + 1)]))  # sorted keys p·N + q
-        self._ring_csr = (np.searchsorted(self._ring // self.n, np.arange(self.n + 1)).astype(np.int64),
-                          (self._ring % self.n).astype(np.int64))  # each vertex's neighbours and itself
+        self._ring_csr = vertex_rings(self.faces, self.n)  # each vertex's neighbours across an edge
         # undirected edges and each face's edges, for edge–edge pairs
         self._edges, face_edge = np.unique(np.sort(e, axis=1), axis=0, return_inverse=True)
         self._face_edges = face_edge.reshape(-1, 3).astype(np.int64)

@@ -19,10 +19,17 @@ from numba import njit, prange
 
 from .closest import closest_barycentric
 
-__all__ = ["Grid", "bin_boxes", "cell_of", "cell_span", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
+__all__ = ["vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
 
 MAX_CELLS = 1 << 21
 """Cells a grid holds, about (one more per axis at most: 16 MB of cell pointers); coarser cells beyond."""
+
+
+def vertex_rings(faces, n: int):
+    """CSR (ptr, idx) of each vertex's neighbours across an edge of ``faces``."""
+    e = np.asarray(faces, np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    keys = np.unique(np.concatenate([e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0]]))
+    return np.searchsorted(keys // n, np.arange(n + 1)).astype(np.int64), (keys % n).astype(np.int64)
 
 
 class Grid:
@@ -166,7 +173,7 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
     ``verts`` against each of the triangles ``tris`` (rows of ``faces``) not at it whose boxes come
     within ``radius``; ``near``: whether a corner of the triangle is a neighbour of the vertex
-    (``ring`` = (ptr, idx): each vertex's neighbours and itself, CSR).
+    (``ring`` = (ptr, idx): each vertex's neighbours, CSR: :func:`vertex_rings`).
 
     ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step; both ``x`` for points).
     With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``.

@@ -24,18 +24,12 @@ from __future__ import annotations
 import numpy as np
 
 from .crossings import edge_crossings
+from .grid import vertex_rings
 
 __all__ = ["untangle", "vertex_rings", "UNTANGLE_ROUNDS"]
 
 UNTANGLE_ROUNDS = 4
 """Rounds of check and push per call: a poke-through takes one, a fold crossed over two or three."""
-
-
-def vertex_rings(faces, n: int):
-    """CSR (ptr, idx) of each vertex's neighbours across an edge of ``faces``."""
-    e = np.asarray(faces, np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    keys = np.unique(np.concatenate([e[:, 0] * n + e[:, 1], e[:, 1] * n + e[:, 0]]))
-    return np.searchsorted(keys // n, np.arange(n + 1)).astype(np.int64), (keys % n).astype(np.int64)
 
 
 def _ring_sums(x, rings, ends, other, tri, point, normal):
