@@ -17,7 +17,7 @@ import numpy as np
 
 from .errors import BodyError
 from .measure import POSES, STEP, Landmark
-from .sections import rings
+from .sections import cut_outlines, plane_frame
 
 __all__ = ["arm_landmarks"]
 
@@ -60,39 +60,21 @@ def _arm_points(v, p, kc, ka, leg_cuts, sign):
     return v[keep], np.array([cx + sign * half, chest.centroid.y, p.z[ka]])
 
 
-def _frame(axis):
-    """Two unit vectors across ``axis``: across the body (nearest X) and the third."""
-    u = np.cross(axis, [0.0, 1.0, 0.0])
-    if np.linalg.norm(u) < 1e-6:
-        u = np.cross(axis, [0.0, 0.0, 1.0])
-    u /= np.linalg.norm(u)
-    return u, np.cross(axis, u)
-
-
 def _cut_at(mesh, point, axis, reach=0.02):
-    """The outline (Polygon in the (u, w) frame of ``axis`` about ``point``) of the cut through ``point``
-    across ``axis`` that is nearest ``point`` (within ``reach``), or None."""
-    from shapely.geometry import Point, Polygon
+    """The outline (Polygon in the :func:`plane_frame` of ``axis`` about ``point``) of the cut through
+    ``point`` across ``axis`` that is nearest ``point`` (within ``reach``), or None."""
+    from shapely.geometry import Point
 
-    sec = mesh.section(plane_origin=point, plane_normal=axis)
-    if sec is None:
-        return None
-    u, w = _frame(axis)
     best, best_d = None, reach
-    for ring in rings(sec):
-        if len(ring) < 4:
-            continue
-        rel = ring - point
-        q = Polygon(np.column_stack([rel @ u, rel @ w]))
-        q = q if q.is_valid else q.buffer(0)
+    for q in cut_outlines(mesh, point, axis):
         d = q.distance(Point(0.0, 0.0))
-        if q.area > 1e-6 and d < best_d:
+        if d < best_d:
             best, best_d = q, d
     return best
 
 
 def _to_3d(poly, point, axis):
-    u, w = _frame(axis)
+    u, w = plane_frame(axis)
     return point + poly.centroid.x * u + poly.centroid.y * w
 
 

@@ -22,7 +22,7 @@ from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, SelfCollider,
 from .collide.untangle import vertex_rings
 from .errors import SimulationError
 
-__all__ = ["ContactPipeline", "ContactSettings", "StaticBody", "Attachments", "LimbWallContact", "BODY_MARGIN",
+__all__ = ["ContactPipeline", "ContactLoads", "ContactSettings", "StaticBody", "Attachments", "LimbWallContact", "BODY_MARGIN",
            "body_margin", "check_self_collision"]
 
 BODY_MARGIN = 0.03
@@ -132,6 +132,43 @@ class LimbWallContact:
             state.v[i] -= np.minimum(vn, 0.0)[:, None] * nh
 
 
+class ContactLoads:
+    """The forces the body and the attachments exert on the cloth, per vertex, averaged over the
+    steps since they were last taken (one frame): what a fit map reads as contact and pressure.
+
+    Each step adds the impulses of the implicit solve's held contacts and pins
+    (:attr:`~tailor.integrators.StepResult.support`) and of the body's response after the step
+    (the velocity change of Eq. 9–14, normal and friction, times the vertex mass). A renumbering
+    of the vertices (a weld, a tear) starts the sums afresh.
+    """
+
+    def __init__(self):
+        self._body = self._attached = None
+        self._elapsed = 0.0
+
+    def add(self, model, dt: float, support=None, response=None) -> None:
+        """One step of ``dt``: ``support`` (N, 3) [N·s] from the solve, ``response`` (N, 3) [N·s] after it."""
+        n = model.vertex_count
+        if self._body is None or len(self._body) != n:
+            self._body, self._attached, self._elapsed = np.zeros((n, 3)), np.zeros((n, 3)), 0.0
+        if support is not None:
+            pinned = model.vertex_pinned
+            self._body[~pinned] += support[~pinned]
+            self._attached[pinned] += support[pinned]
+        if response is not None:
+            self._body += response
+        self._elapsed += dt
+
+    def take(self, n: int):
+        """(body force, attachment force), each (n, 3) [N], averaged since the last take (zeros when
+        nothing was summed for ``n`` vertices); the sums start again."""
+        body, attached, elapsed = self._body, self._attached, self._elapsed
+        self._body = self._attached = None
+        if body is None or len(body) != n or elapsed <= 0:
+            return np.zeros((n, 3)), np.zeros((n, 3))
+        return body / elapsed, attached / elapsed
+
+
 class ContactPipeline:
     """The contacts of one cloth over a (moving) body, after every step (module docstring).
 
@@ -160,6 +197,7 @@ class ContactPipeline:
         self.constraints: tuple = ()
         self.pending: Contacts | None = None  # body contacts the next implicit step holds
         self.rescued = 0
+        self.loads = ContactLoads()
         self._version = 0  # topology changes (cuts, tears) so far
         self._self: SelfCollider | None = None
         self._self_key = None
@@ -198,16 +236,21 @@ class ContactPipeline:
         p = self.pending
         return p if p is not None and p.vertex_count == model.vertex_count else None
 
-    def respond(self, model, state, dt: float, impulses=None) -> None:
-        """Every contact of ``state`` after a step, in place; ``impulses`` the step's held-contact impulses."""
+    def respond(self, model, state, dt: float, impulses=None, support=None) -> None:
+        """Every contact of ``state`` after a step, in place; ``impulses`` the step's held-contact
+        normal impulses, ``support`` its held contacts' and pins' whole impulses (for :attr:`loads`)."""
         bx, bv, k = self.motion.at(state.t) if self.motion is not None else (None, None, 0)
         for constraint in self.constraints:
             constraint.apply(state, bx, bv)
+        response = None
         if self.body is not None:
             mu = self.friction * self.settings.friction_scale
+            v0 = state.v.copy()
             contacts = self.body.respond(model, state, dt, bx, bv, k, thickness=self.thickness, friction=mu,
                                          impulse=impulses)
             self.pending = contacts if self.settings.hold else None
+            response = (state.v - v0) * np.asarray(model.vertex_mass)[:, None]
+        self.loads.add(model, dt, support, response)
         if self.self_mode != "off" and self.settings.self_collision:
             self.self_collider(model, state.x).respond(self._inv_mass, state, dt)
 

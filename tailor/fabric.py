@@ -49,6 +49,9 @@ class Fabric:
     tear_strain : float
         Stretch across a line of the cloth at which it rips (0.25 = 25 %; 0 = never), used when
         tearing is switched on (:mod:`tailor.tearing`).
+    wearable_stretch : float
+        The largest stretch still comfortable to wear (0.06 = 6 %): the top of a fit map's strain
+        scale (CLO's "wearable stretch limit", :mod:`tailor.fit`). Presets: ``docs/fabrics.md``.
     kawabata : KawabataCurves or None
         Measured tensile, shear and bending curves (Bottino et al.); when given they replace the
         stretch and bending numbers in the elastic law (the numbers remain for the time step).
@@ -63,6 +66,7 @@ class Fabric:
     thickness: float = 1.0e-3
     kawabata: "KawabataCurves | None" = None
     tear_strain: float = 0.0
+    wearable_stretch: float = 0.10
 
     def __post_init__(self):
         for f in fields(self):
@@ -83,6 +87,8 @@ class Fabric:
             raise FabricError(f"fabric {self.name!r}: friction must be >= 0, got {self.friction:g}")
         if self.thickness <= 0:
             raise FabricError(f"fabric {self.name!r}: thickness must be positive, got {self.thickness * 1e3:g} mm")
+        if not 0.0 < self.wearable_stretch <= 5.0:
+            raise FabricError(f"fabric {self.name!r}: wearable_stretch must be in (0, 500] %, got {self.wearable_stretch * 100:g} %")
         if self.tear_strain < 0:
             raise FabricError(f"fabric {self.name!r}: tear_strain must be >= 0 % (0: never tears), got {self.tear_strain * 100:g} %")
 
@@ -151,24 +157,25 @@ class KawabataCurves:
         return KawabataCurves(*(tuple([c[-1]]) for c in (self.tensile_warp, self.tensile_weft, self.shear, self.bending)))
 
 
-def _p(name, g_m2, stretch_pct, bending, friction=0.4, thickness_mm=1.0, weft_pct=None, tear_pct=25.0):
+def _p(name, g_m2, stretch_pct, bending, friction=0.4, thickness_mm=1.0, weft_pct=None, tear_pct=25.0, wearable_pct=10.0):
     w = stretch_pct if weft_pct is None else weft_pct
     return Fabric(name, g_m2 * 1e-3, stretch_pct * 1e-2, w * 1e-2, bending, friction, thickness_mm * 1e-3,
-                  tear_strain=tear_pct * 1e-2)
+                  tear_strain=tear_pct * 1e-2, wearable_stretch=wearable_pct * 1e-2)
 
 
 PRESETS: dict[str, Fabric] = {
     f.name: f
     for f in (
-        # tear strains: elongation at break of the woven/knitted/leather classes (order of magnitude)
-        _p("chiffon", 35, 3.0, 0.3, 0.3, 0.3, tear_pct=20.0),
-        _p("silk", 50, 2.0, 1.0, 0.25, 0.3, tear_pct=20.0),
-        _p("cotton", 120, 1.0, 8.0, 0.4, 0.5, tear_pct=25.0),
-        _p("jersey", 180, 8.0, 4.0, 0.5, 0.8, weft_pct=15.0, tear_pct=100.0),
-        _p("wool", 280, 1.5, 15.0, 0.5, 1.5, tear_pct=30.0),
-        _p("denim", 400, 0.5, 60.0, 0.5, 1.0, tear_pct=25.0),
-        _p("leather", 1000, 0.3, 300.0, 0.6, 1.2, tear_pct=50.0),
-        _p("heavy_leather", 10000, 0.2, 1000.0, 0.6, 3.0, tear_pct=50.0),
+        # tear strains: elongation at break of the woven/knitted/leather classes (order of magnitude);
+        # wearable stretch: the comfortable stretch of the class (docs/fabrics.md)
+        _p("chiffon", 35, 3.0, 0.3, 0.3, 0.3, tear_pct=20.0, wearable_pct=8.0),
+        _p("silk", 50, 2.0, 1.0, 0.25, 0.3, tear_pct=20.0, wearable_pct=6.0),
+        _p("cotton", 120, 1.0, 8.0, 0.4, 0.5, tear_pct=25.0, wearable_pct=5.0),
+        _p("jersey", 180, 8.0, 4.0, 0.5, 0.8, weft_pct=15.0, tear_pct=100.0, wearable_pct=30.0),
+        _p("wool", 280, 1.5, 15.0, 0.5, 1.5, tear_pct=30.0, wearable_pct=6.0),
+        _p("denim", 400, 0.5, 60.0, 0.5, 1.0, tear_pct=25.0, wearable_pct=3.0),
+        _p("leather", 1000, 0.3, 300.0, 0.6, 1.2, tear_pct=50.0, wearable_pct=10.0),
+        _p("heavy_leather", 10000, 0.2, 1000.0, 0.6, 3.0, tear_pct=50.0, wearable_pct=5.0),
     )
 }
 """Named fabrics, light to heavy. ``heavy_leather`` is Carignan's 1.0 g/cm² extreme."""
@@ -188,7 +195,8 @@ def _kes(name, g_m2, warp, weft, shear_g, bending_b, friction=0.4, thickness_mm=
     lam_warp = hanging_strain(rho, KawabataCurves.initial_slope(curves.tensile_warp))
     lam_weft = hanging_strain(rho, KawabataCurves.initial_slope(curves.tensile_weft))
     c = b_si / (rho * 9.80665 * 1e-6)
-    return Fabric(name, rho, lam_warp, lam_weft, c, friction, thickness_mm * 1e-3, curves, tear_strain=0.25)
+    return Fabric(name, rho, lam_warp, lam_weft, c, friction, thickness_mm * 1e-3, curves, tear_strain=0.25,
+                  wearable_stretch=0.05)
 
 
 KAWABATA_FABRICS: dict[str, Fabric] = {

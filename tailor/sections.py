@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["horizontal_outlines", "trunk_chain", "TrunkChain", "second_moments", "rings"]
+__all__ = ["horizontal_outlines", "trunk_chain", "TrunkChain", "second_moments", "rings", "plane_frame", "cut_outlines"]
 
 MIN_AREA = 2e-5
 """Smallest outline kept [m²] (a 5 mm disc): slivers from noise, folds and open rings are dropped."""
@@ -92,6 +92,36 @@ def horizontal_outlines(vertices, faces, heights):
     heights = np.asarray(heights, float)
     sections = mesh.section_multiplane(plane_origin=[0.0, 0.0, 0.0], plane_normal=[0.0, 0.0, 1.0], heights=heights)
     return [_polygons(rings(sec)) if sec is not None else [] for sec in sections]
+
+
+def plane_frame(axis):
+    """Two unit vectors across ``axis``: across the body (nearest X) and the third."""
+    u = np.cross(axis, [0.0, 1.0, 0.0])
+    if np.linalg.norm(u) < 1e-6:
+        u = np.cross(axis, [0.0, 0.0, 1.0])
+    u /= np.linalg.norm(u)
+    return u, np.cross(axis, u)
+
+
+def cut_outlines(mesh, point, axis, min_area: float = 1e-6) -> list:
+    """Every outline (shapely geometry in the :func:`plane_frame` of ``axis``, about ``point``) of the
+    trimesh ``mesh`` cut by the plane through ``point`` across ``axis``."""
+    from shapely.geometry import Polygon
+
+    sec = mesh.section(plane_origin=point, plane_normal=axis)
+    if sec is None:
+        return []
+    u, w = plane_frame(axis)
+    out = []
+    for ring in rings(sec):
+        if len(ring) < 4:
+            continue
+        rel = ring - point
+        q = Polygon(np.column_stack([rel @ u, rel @ w]))
+        q = q if q.is_valid else q.buffer(0)
+        if q.area > min_area:
+            out.append(q)
+    return out
 
 
 def second_moments(poly) -> np.ndarray:

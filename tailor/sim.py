@@ -161,7 +161,7 @@ class Stepper:
             result = self.integrator.step(model, state, h, self.forces)
         else:
             result = self.integrator.step(model, state, h, self.forces, contacts=pipe.hold(model), predict=pipe.predict)
-            pipe.respond(model, result.state, h, result.impulses)
+            pipe.respond(model, result.state, h, result.impulses, result.support)
         for hook in self.hooks:
             hook(model, result.state, h)
         self.steps += 1

@@ -27,7 +27,7 @@ def test_skirt_sews_into_one_piece_without_penetration(skirt_static, tmp_path):
     pattern, body, result = skirt_static
     out = write_drape(result, tmp_path / "skirt")
     files = sorted(p.name for p in out.iterdir())
-    assert files == ["garment.mtl", "garment_0000.obj", "garment_0001.obj", "garment_0002.obj", "report.json"]
+    assert files == ["garment.mtl", "garment_0000.obj", "garment_0001.obj", "garment_0002.obj", "loads.npz", "report.json"]
     lines = (out / "garment_0000.obj").read_text().splitlines()
     vertices = np.array([[float(a) for a in ln.split()[1:]] for ln in lines if ln.startswith("v ")])
     faces = np.array([[int(c.split("/")[0]) - 1 for c in ln.split()[1:]] for ln in lines if ln.startswith("f ")])

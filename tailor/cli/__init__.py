@@ -15,6 +15,7 @@ import sys
 from ..errors import TailorError
 from .body import add_body_commands
 from .drape import add_drape_command
+from .fit import add_fit_command
 from .output import add_output_commands
 from .pattern import add_pattern_commands
 
@@ -30,6 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_pattern_commands(sub)
     add_body_commands(sub)
     add_drape_command(sub)
+    add_fit_command(sub)
     add_output_commands(sub)
     return p
 

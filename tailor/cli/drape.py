@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..errors import TailorError
 from .common import UP_CHOICES, _formats, _preview, preview_options
+from .fit import check_maximum, describe, fit_frames, make_fits
 from .pattern import _graded
 
 
@@ -34,9 +35,10 @@ def _cmd_drape(args) -> int:
 
     formats = _formats(args.format)  # checked before a long run, not after
     options = _options(args)
-    if (args.cuts or args.tear) and (args.preview or any(f != "obj" for f in formats)):
+    if (args.cuts or args.tear) and (args.preview or args.fit or any(f != "obj" for f in formats)):
         raise TailorError("--cuts/--tear change the garment's mesh during the run: only the OBJ sequence can hold "
-                          "that (leave out --format and --preview)")
+                          "that (leave out --format, --preview and --fit)")
+    check_maximum(args.fit_max)
     pattern = read_pattern(args.pattern)
     out = Path(args.out) if args.out else Path("out") / pattern.name
     if out.exists() and not args.overwrite:
@@ -50,7 +52,18 @@ def _cmd_drape(args) -> int:
         result = drape(pattern, body, options=options, progress=bars)
     finally:
         bars.close()
+    fits = None
+    if args.fit:
+        from ..fit import FitSource, fit_section
+
+        source = FitSource.of_drape(result)
+        fits = make_fits(source, fit_frames(args.fit, len(result.frames)), quiet=args.quiet)
+        result.report.fit = fit_section(fits)
     write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
+    if fits:
+        from ..io.fit_files import write_fit
+
+        write_fit(fits, out / "fit", source.bodies, maximum=args.fit_max)
     if any(f != "obj" for f in formats) or args.preview:
         from ..io.animation import animation_from_drape
         from ..io.export import export
@@ -68,6 +81,8 @@ def _cmd_drape(args) -> int:
           f"crossings {max(r.crossings_per_frame, default=0)}, "
           + (f"{len(options.cuts)} cuts and {r.tearing['edges_torn']} edges torn, " if r.tearing is not None else "")
           + f"{time.perf_counter() - t0:.1f} s -> {out}/")
+    if fits:
+        print(describe(fits, out / "fit"))
     crossings = r.crossings_per_frame
     if max(crossings, default=0):
         worst = max(range(len(crossings)), key=crossings.__getitem__)
@@ -163,5 +178,9 @@ def add_drape_command(sub) -> None:
     d.add_argument("--format", action="append", metavar="FMT",
                    help="also export as pc2, glb, usd or usda (repeat or comma-separate; the OBJ frames are always written)")
     d.add_argument("--preview", action="store_true", help="render preview frames and a GIF into OUT/preview")
+    d.add_argument("--fit", nargs="?", const="last", metavar="N|all",
+                   help="fit maps (stretch, pressure, gap, ease) of the last frame, frame N or all, into OUT/fit")
+    d.add_argument("--fit-max", type=float, metavar="PCT",
+                   help="top of the strain scale, %% (default: each fabric's wearable stretch)")
     preview_options(d)
     d.set_defaults(func=_cmd_drape)

@@ -9,6 +9,7 @@ Nothing here writes files: frames go to the caller (``on_frame``) and into the r
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import replace
 
@@ -80,7 +81,8 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
         report.phases["transition"] = phase
     state, report.phases["motion"], report.max_penetration_m_per_frame, report.crossings_per_frame = animate(d, state)
     _close(report, d, t_start)
-    return DrapeResult(d.frames, d.body_frames, *d.first_topology, body.faces, pattern, report, topology=d.topology)
+    return DrapeResult(d.frames, d.body_frames, *d.first_topology, body.faces, pattern, report, topology=d.topology,
+                       contact_forces=[c for c, _ in d.loads], attachment_forces=[a for _, a in d.loads])
 
 
 def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
@@ -118,6 +120,9 @@ def _header(d: Dressing, pattern, body, loops, opts: DrapeOptions) -> DrapeRepor
         loops={lp.landmark: {"panels": list(lp.panels), "length_cm": round(lp.length * 100, 1),
                              "body_cm": round(lp.girth * 100, 1), "ease_cm": round(lp.ease * 100, 1)} for lp in loops},
         fabrics={p.name: g.fabrics[i].name for i, p in enumerate(pattern.panels)},
+        panels={p.name: {"grain_deg": round(math.degrees(p.grain), 6),
+                         "wearable_stretch_pct": round(g.fabrics[i].wearable_stretch * 100, 6)}
+                for i, p in enumerate(pattern.panels)},
         body={**body.report, "name": body.name, "fps": body.fps, "frames": body.frame_count},
         params={p.name: unwelded.params[i].as_dict() for i, p in enumerate(pattern.panels)},
         quality={"name": q.name, "max_step_s": q.step, "solver_tolerance": q.tolerance},

@@ -47,6 +47,7 @@ class Dressing:
         self.motion_limit = MOTION_MAX_STRETCH
         self.frames: list = []
         self.body_frames: list = []
+        self.loads: list = []  # (body contact, attachment) forces per welded vertex [N] of each frame
         self.topology: list = []  # (first frame, mesh, weld) after each cut or tear
         self.first_topology = (garment.mesh, garment.weld)  # frame 0's
         self.constrain()
@@ -89,6 +90,8 @@ class Dressing:
             self.on_frame(len(self.frames), x, body_x)
         self.frames.append(x.copy())
         self.body_frames.append(body_x.copy())
+        contact, attached = self.contacts.loads.take(len(state.x))
+        self.loads.append((contact.astype(np.float32), attached.astype(np.float32)))
 
     def tell(self, done: int, total: int, state) -> None:
         if self.progress is not None:

@@ -65,6 +65,7 @@ class DrapeReport:
     seam_pairs: int
     loops: dict
     fabrics: dict
+    panels: dict  # name → {"grain_deg", "wearable_stretch_pct"}: what a fit map reads per panel
     body: dict
     params: dict
     quality: dict
@@ -85,6 +86,7 @@ class DrapeReport:
     welded_vertices: int = 0
     self_collision: dict = field(default_factory=dict)
     tearing: dict | None = None
+    fit: dict | None = None  # tailor.fit.fit_section of the frames mapped (tailor drape --fit)
 
     def to_json(self) -> dict:
         """The report as report.json holds it (plain numbers, lists and dicts)."""
@@ -118,6 +120,10 @@ class DrapeResult:
     topology : list of (frame, GarmentMesh, weld)
         Where a cut or a tear changed the garment's mesh: from that frame on, frames hold the
         vertices of that mesh (``mesh`` and ``weld`` above are frame 0's). Empty if it never changed.
+    contact_forces, attachment_forces : list of (W, 3) float32 arrays [N]
+        Per frame, the force the body's contact (normal and friction) and the attachments exert
+        on each welded vertex (the OBJ's vertex order), averaged over the steps of the frame
+        (:class:`~tailor.contact.ContactLoads`).
     """
 
     frames: list
@@ -128,6 +134,8 @@ class DrapeResult:
     pattern: object
     report: DrapeReport
     topology: list = field(default_factory=list)
+    contact_forces: list = field(default_factory=list)
+    attachment_forces: list = field(default_factory=list)
 
     def topology_at(self, frame: int):
         """``(mesh, weld)`` of frame ``frame``."""

@@ -54,11 +54,14 @@ class Counters:
 @dataclass(frozen=True, slots=True)
 class StepResult:
     """One step: the new state, the normal impulse [N·s] the solve gave each vertex it held on the
-    body ((N,), None if it held none) and the CG iterations it took."""
+    body ((N,), None if it held none), the CG iterations it took, and ``support`` ((N, 3) [N·s],
+    None if nothing held the cloth): the whole impulse, friction included, that the held body
+    contacts and the pinned vertices' attachments gave the cloth during the step."""
 
     state: object
     impulses: np.ndarray | None = None
     iterations: int = 0
+    support: np.ndarray | None = None
 
 
 Forces = Callable[[object, object], np.ndarray]

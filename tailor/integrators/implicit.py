@@ -8,7 +8,7 @@ Unconditionally stable for the linear part: it takes steps many times Eq. 24's.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -81,6 +81,7 @@ class _System:
     pinv: np.ndarray
     rhs: np.ndarray
     free: np.ndarray  # (3N,) dofs not pinned
+    rhs0: np.ndarray  # the right-hand side as assembled: before pinned rows were cleared and friction added
 
     def reactions(self, dv, held: _Held):
         """(K, 3) impulse [N·s] the held contacts exert: the residual A·Δv − b at their dofs."""
@@ -89,6 +90,26 @@ class _System:
         out = np.empty((len(held), 3))
         bsr_rows(self.bptr, self.bcol, self.blocks, dv, held.ids, out)
         return out - self.rhs.reshape(-1, 3)[held.ids]
+
+
+def _support(model, system: _System, dv, held: _Held):
+    """(N, 3) impulse [N·s] the held contacts and the pins gave the cloth in a solved step (None: none).
+
+    A held vertex's is the residual A·Δv − b of the system as assembled (its normal reaction and
+    any friction, static or at the Coulomb limit); a pinned vertex's is what cancels the rest of
+    its momentum balance, −b (its Δv is held at 0: exact for a pin at rest, as the attachments of
+    a settled garment are)."""
+    pinned = model.vertex_pinned
+    if not len(held) and not pinned.any():
+        return None
+    base = system.rhs0.reshape(-1, 3)
+    out = np.zeros_like(base)
+    out[pinned] = -base[pinned]
+    if len(held):
+        r = np.empty((len(held), 3))
+        bsr_rows(system.bptr, system.bcol, system.blocks, dv, held.ids, r)
+        out[held.ids] += r - base[held.ids]
+    return out
 
 
 class ImplicitEuler(IntegratorBase):
@@ -155,6 +176,7 @@ class ImplicitEuler(IntegratorBase):
         blocks, kv = implicit_blocks(model, state, pattern, dt)
         free = np.repeat(~model.vertex_pinned, 3)
         rhs = dt * (f - dt * kv.reshape(-1))
+        rhs0 = rhs.copy()
         diagonal = pattern.diagonal_block_index
         for a in range(3):
             blocks[diagonal, a, a] += model.vertex_mass
@@ -168,7 +190,7 @@ class ImplicitEuler(IntegratorBase):
             drag[model.vertex_pinned] = 0.0
             pattern.add_to_diagonal(blocks, dt * drag)
         pinv = inverse_3x3(pattern.diagonal_blocks(blocks))
-        return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free)
+        return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free, rhs0)
 
     def _solve(self, system: _System, dv, v, held: _Held):
         """CG on A·Δv = rhs in place, holding the contacts' velocities; (iterations, converged)."""
@@ -271,7 +293,10 @@ class ImplicitEuler(IntegratorBase):
         """The step taken as two half steps, each holding the contacts this one was given."""
         self._warm = None
         half = self._step(model, state, 0.5 * dt, forces, contacts, predict, depth + 1)
-        return self._step(model, half.state, 0.5 * dt, forces, contacts, predict, depth + 1)
+        end = self._step(model, half.state, 0.5 * dt, forces, contacts, predict, depth + 1)
+        if half.support is None:
+            return end
+        return replace(end, support=half.support if end.support is None else half.support + end.support)
 
     def _overstretches(self, model, state, x_end) -> bool:
         """Whether ending at ``x_end`` stretches a triangle more than ``max_stretch_change`` this step."""
@@ -323,7 +348,8 @@ class ImplicitEuler(IntegratorBase):
             impulses = np.zeros(n)
             impulses[held.ids] = np.einsum("ij,ij->i", system.reactions(dv, held), held.normals)
         v1 = state.v + dv.reshape(n, 3)
-        return StepResult(State(state.x + dt * v1, v1, state.t + dt), impulses, iterations)
+        return StepResult(State(state.x + dt * v1, v1, state.t + dt), impulses, iterations,
+                          _support(model, system, dv, held))
 
     def _check(self, state, dt, dv, converged, iterations) -> None:
         """Warn of an unconverged solve; raise on a non-finite or indefinite one."""

@@ -21,8 +21,9 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
     """Write ``result`` (:class:`tailor.dress.DrapeResult`) into ``out_dir``.
 
     Files: ``garment_0000.obj`` … (``v`` welded so a seam is one vertex, ``vt`` the flat pattern in
-    metres, one ``g`` per panel), ``garment.mtl``, optionally ``body_0000.obj`` …, and
-    ``report.json``. A garment cut or torn during the run is written with each frame's own mesh.
+    metres, one ``g`` per panel), ``garment.mtl``, optionally ``body_0000.obj`` …, ``loads.npz``
+    (per frame the body's contact and the attachments' forces on each OBJ vertex, N:
+    ``contact_0000``, ``attachment_0000`` …, what :mod:`tailor.fit` reads) and ``report.json``. A garment cut or torn during the run is written with each frame's own mesh.
     Everything is written into a temporary folder beside ``out_dir`` and renamed
     into place at the end; an existing ``out_dir`` is refused unless ``overwrite``.
     """
@@ -42,6 +43,10 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
             (tmp / f"garment_{k:04d}.obj").write_text(text)
             if with_body:
                 (tmp / f"body_{k:04d}.obj").write_text(obj_text(result.body_frames[k], result.body_faces))
+        if result.contact_forces:
+            loads = {f"contact_{k:04d}": c for k, c in enumerate(result.contact_forces)}
+            loads.update({f"attachment_{k:04d}": a for k, a in enumerate(result.attachment_forces)})
+            np.savez_compressed(tmp / "loads.npz", **loads)
         report = result.report.to_json()
         report["pattern"] = result.pattern.source
         report["name"] = result.pattern.name

@@ -59,7 +59,8 @@ _SIDE = {"panel", "edge", "hole", "range"}
 _STITCH = {"between", "orientation", "label"}
 _ATTACH = {"panel", "edge", "vertex", "hole", "range", "to"}
 _PLACEMENT = {"landmark", "angle", "anchor", "offset", "clearance"}
-_FABRIC = {"preset", "density", "stretch", "stretch_weft", "bending", "friction", "thickness", "kawabata", "tear_strain"}
+_FABRIC = {"preset", "density", "stretch", "stretch_weft", "bending", "friction", "thickness", "kawabata", "tear_strain",
+           "wearable_stretch"}
 _KAWABATA = {"tensile_warp", "tensile_weft", "shear", "bending"}
 # file units of each Kawabata curve → SI: (deformation, load) scale factors
 _KAWABATA_UNITS = {
@@ -168,6 +169,8 @@ def _fabric(node: Node) -> Fabric:
         values["kawabata"] = _kawabata(node.key("kawabata"))
     if node.has("tear_strain"):
         values["tear_strain"] = node.key("tear_strain").as_number(minimum=0) * PERCENT
+    if node.has("wearable_stretch"):
+        values["wearable_stretch"] = node.key("wearable_stretch").as_number(positive=True, maximum=500) * PERCENT
     label = base_name if not values else f"{base_name} (custom)"
     return _checked(node, lambda: base.with_values(name=label, **values))
 

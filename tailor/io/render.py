@@ -20,15 +20,20 @@ def _shade(vertices, faces, view_dir, base_color):
     light = np.array([0.3, -0.6, 0.75])
     light /= np.linalg.norm(light)
     lam = np.clip(np.abs(n @ light), 0, 1) * 0.75 + 0.25
-    color = np.clip(np.asarray(base_color)[None, :] * lam[:, None], 0, 1)
+    base = np.asarray(base_color, float)
+    color = np.clip((base if base.ndim == 2 else base[None, :]) * lam[:, None], 0, 1)
     depth = p.mean(axis=1) @ view_dir
     return color, depth
 
 
-def render_views(path, meshes, *, views=("front", "side"), size=(8, 6), title=None, dpi=100, lines=()):
-    """Render ``meshes`` [(vertices (N, 3), faces (F, 3), rgb)] seen from the front (−Y) and side (+X) to a PNG.
+def render_views(path, meshes, *, views=("front", "side"), size=(8, 6), title=None, dpi=100, lines=(), colorbar=None):
+    """Render ``meshes`` [(vertices (N, 3), faces (F, 3), rgb[, bias])] seen from the front (−Y) and
+    side (+X) (or back) to a PNG.
 
+    ``rgb`` is one colour or one per face; ``bias`` [m] moves a mesh's faces towards the camera when
+    sorting (a garment lying on a body is drawn over the body faces within that distance).
     ``lines`` [(start (3,), end (3,), rgb)] are drawn over the meshes (landmark cuts, say).
+    ``colorbar``: (matplotlib ScalarMappable, label) drawn beside the views.
     """
     import matplotlib
 
@@ -43,8 +48,9 @@ def render_views(path, meshes, *, views=("front", "side"), size=(8, 6), title=No
     for ax, view in zip(axes, views):
         d, (i, j) = directions[view]
         polys, colors, depths = [], [], []
-        for vertices, faces, rgb in meshes:
+        for vertices, faces, rgb, *bias in meshes:
             c, z = _shade(np.asarray(vertices), np.asarray(faces), d, rgb)
+            z = z - (bias[0] if bias else 0.0)
             xy = np.asarray(vertices)[:, [i, j]].copy()
             if view == "back":
                 xy[:, 0] *= -1
@@ -63,6 +69,9 @@ def render_views(path, meshes, *, views=("front", "side"), size=(8, 6), title=No
         ax.set_aspect("equal")
         ax.set_title(view)
         ax.axis("off")
+    if colorbar is not None:
+        mappable, label = colorbar
+        fig.colorbar(mappable, ax=list(axes), label=label, shrink=0.8)
     if title:
         fig.suptitle(title)
     with atomic_write(path, "wb") as fh:
