@@ -34,14 +34,11 @@ import numpy as np
 from .errors import BodyError, TailorError
 from .geometry import face_areas
 
-__all__ = ["FitMap", "FitSource", "Ease", "fit_map", "fit_section", "face_stretch", "body_gap", "landmark_ease", "EASE_LANDMARKS",
-           "LOADS_FILE"]
+__all__ = ["FitMap", "FitSource", "Ease", "fit_map", "fit_section", "face_stretch", "body_gap", "landmark_ease",
+           "EASE_LANDMARKS", "vertex_field", "VERTEX_FIELDS"]
 
 EASE_LANDMARKS = ("bust", "waist", "hips", "left_upper_arm", "right_upper_arm", "left_thigh", "right_thigh")
 """Landmarks whose ease a fit map reports (where the garment covers them)."""
-
-LOADS_FILE = "loads.npz"
-"""The run folder's per-frame contact and attachment forces (``contact_NNNN``, ``attachment_NNNN``, N)."""
 
 GAP_REACH = (0.03, 0.15)
 """Radii [m] within which the body's nearest point is searched exactly, in turn; beyond the last
@@ -158,12 +155,10 @@ class BodyFrames:
 
 @dataclass(frozen=True)
 class FitSource:
-    """What fit maps are made of: the drape as an :class:`~tailor.io.animation.Animation`, the
-    per-frame loads, each panel's grain [rad] and wearable stretch [%], and the body per frame."""
+    """What fit maps are made of: the drape as an :class:`~tailor.io.animation.Animation` (with its
+    loads), each panel's grain [rad] and wearable stretch [%], and the body per frame."""
 
     anim: object
-    contact: list
-    attached: list
     grain: np.ndarray
     wearable: np.ndarray
     bodies: BodyFrames
@@ -176,13 +171,13 @@ class FitSource:
 
         anim = animation_from_drape(result, with_body=True)
         grain, wearable = _panel_values(result.report.panels, anim.group_names)
-        bodies = BodyFrames(anim.body_positions, anim.body_faces)
-        return cls(anim, list(result.contact_forces), list(result.attachment_forces), grain, wearable, bodies)
+        return cls(_with_loads(anim, []), grain, wearable, BodyFrames(anim.body_positions, anim.body_faces))
 
     @classmethod
     def of_run(cls, run_dir, body=None) -> "FitSource":
         """The fit source of a run folder (``body``: a :class:`~tailor.body.Body` for runs written
-        without ``--with-body``; the body's frames are taken from the folder when it has them)."""
+        without ``--with-body``, default the shipped body its report names; the body's frames are
+        taken from the folder when it has them)."""
         from .io.animation import read_run
 
         folder = Path(run_dir)
@@ -193,14 +188,25 @@ class FitSource:
         if "panels" not in report:
             notes.append("report.json has no panel grains or wearable stretch (a run of an older tailor): "
                          "grain 90°, wearable stretch 10 %")
-        contact, attached = _read_loads(folder / LOADS_FILE, anim, notes)
+        anim = _with_loads(anim, notes)
         if anim.has_body:
             bodies = BodyFrames(anim.body_positions, anim.body_faces)
         else:
             body = body if body is not None else _named_body(report)
             motion = report.get("phases", {}).get("motion", {}).get("frames", anim.frame_count)
             bodies = BodyFrames(body=body, offset=max(0, anim.frame_count - int(motion)), fps=anim.fps)
-        return cls(anim, contact, attached, grain, wearable, bodies, tuple(notes))
+        return cls(anim, grain, wearable, bodies, tuple(notes))
+
+
+def _with_loads(anim, notes: list):
+    """``anim`` with zero loads (and a note) where it has none."""
+    if anim.contact_forces is not None:
+        return anim
+    from dataclasses import replace
+
+    notes.append("no contact forces recorded (a run of an older tailor): contact forces and pressure are 0")
+    zero = np.zeros_like(anim.positions)
+    return replace(anim, contact_forces=zero, attachment_forces=zero)
 
 
 def _named_body(report: dict):
@@ -226,24 +232,6 @@ def _panel_values(panels, names):
     grain = np.array([math.radians(float(panels.get(n, {}).get("grain_deg", 90.0))) for n in names])
     wearable = np.array([float(panels.get(n, {}).get("wearable_stretch_pct", 10.0)) for n in names])
     return grain, wearable
-
-
-def _read_loads(path: Path, anim, notes: list):
-    """Per-frame (contact, attachment) forces of a run folder; zeros (with a note) if it has none."""
-    zero = [np.zeros((anim.vertex_count, 3))] * anim.frame_count
-    if not path.exists():
-        notes.append(f"{path.name} missing (a run of an older tailor): contact forces and pressure are 0")
-        return zero, zero
-    try:
-        with np.load(path) as data:
-            contact = [data[f"contact_{k:04d}"] for k in range(anim.frame_count)]
-            attached = [data[f"attachment_{k:04d}"] for k in range(anim.frame_count)]
-    except (KeyError, ValueError, OSError) as exc:
-        raise TailorError(f"{path}: unreadable or incomplete ({exc})") from None
-    for k, c in enumerate(contact):
-        if c.shape != (anim.vertex_count, 3):
-            raise TailorError(f"{path}: contact_{k:04d} has shape {c.shape}, the garment {anim.vertex_count} vertices")
-    return contact, attached
 
 
 def face_stretch(uv, face_uv, x, faces, grain):
@@ -365,7 +353,7 @@ def fit_map(source, frame: int = -1, *, ease: bool = True) -> FitMap:
     group = np.asarray(anim.face_group)
     s_max, s_warp, s_weft = face_stretch(anim.uv, anim.face_uv, x, faces, src.grain[group])
     rest = face_areas(anim.uv, anim.face_uv)
-    contact = np.asarray(src.contact[k], float)
+    contact = np.asarray(anim.contact_forces[k], float)
     notes = list(src.notes)
     body = src.bodies.at(k)
     if body is None:
@@ -381,9 +369,44 @@ def fit_map(source, frame: int = -1, *, ease: bool = True) -> FitMap:
         except BodyError as exc:
             notes.append(f"ease not measured on frame {k}: {exc}")
     return FitMap(k, x, faces, group, tuple(anim.group_names), rest, s_max, s_warp, s_weft, contact,
-                  np.asarray(src.attached[k], float), pressure, dist * 1e3, src.wearable, found, tuple(notes))
+                  np.asarray(anim.attachment_forces[k], float), pressure, dist * 1e3, src.wearable, found, tuple(notes))
 
 
 def fit_section(fits) -> dict:
     """The fit section of report.json: ``{"frames": [FitMap.summary(), …]}``."""
     return {"frames": [f.summary() for f in fits]}
+
+
+VERTEX_FIELDS = ("stretch", "pressure", "gap")
+"""Per-vertex fit quantities of :func:`vertex_field` (what exports and previews colour by)."""
+
+
+def vertex_field(anim, k: int, name: str) -> np.ndarray:
+    """One of :data:`VERTEX_FIELDS` per vertex of frame ``k`` of an Animation, from it alone.
+
+    ``stretch`` [%]: the mean ``stretch_max`` of the faces round the vertex, weighted by their
+    pattern area; ``pressure`` [kPa]: the contact force along the garment's own normal over the
+    vertex's area (the fit map's uses the body's normal; where the cloth lies on the body they
+    agree), 0 when the animation has no loads; ``gap`` [mm]: :func:`body_gap` (needs the body).
+    """
+    x, faces = anim.positions[k], np.asarray(anim.faces)
+    n = len(x)
+    if name == "stretch":
+        s = face_stretch(anim.uv, anim.face_uv, x, faces, np.zeros(len(faces)))[0]
+        w = np.repeat(face_areas(anim.uv, anim.face_uv), 3)
+        total = np.bincount(faces.reshape(-1), weights=w, minlength=n)
+        return np.bincount(faces.reshape(-1), weights=np.repeat(s, 3) * w, minlength=n) / np.maximum(total, 1e-300)
+    if name == "pressure":
+        if anim.contact_forces is None:
+            return np.zeros(n)
+        p = x[faces]
+        fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        normal = np.stack([np.bincount(faces.reshape(-1), weights=np.repeat(fn[:, i], 3), minlength=n) for i in range(3)], 1)
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        along = np.abs(np.einsum("ij,ij->i", anim.contact_forces[k], normal))
+        return along / np.maximum(vertex_areas(x, faces, n), 1e-12) * 1e-3
+    if name == "gap":
+        if not anim.has_body:
+            raise TailorError(f"{anim.name}: colouring by gap needs the body (drape with --with-body)")
+        return body_gap(x, anim.body_positions[k], anim.body_faces)[0] * 1e3
+    raise TailorError(f"unknown fit field {name!r}; choose from {', '.join(VERTEX_FIELDS)}")

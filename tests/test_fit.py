@@ -174,3 +174,32 @@ def test_wearable_stretch_is_a_fabric_field_in_pattern_files():
     d["fabric"]["wearable_stretch"] = -1
     with pytest.raises(Exception, match="wearable_stretch"):
         pattern_from_dict(d, source="t")
+
+
+def test_exports_and_previews_carry_the_fit(tshirt_run, tmp_path):
+    pygltflib = pytest.importorskip("pygltflib")
+    from tailor.io.export import export, read_run
+    from tailor.io.preview import PreviewSettings, preview
+
+    anim = read_run(tshirt_run)
+    assert anim.contact_forces is not None and anim.contact_forces.shape == anim.positions.shape
+    (glb,) = export(anim, "glb", tmp_path)
+    doc = pygltflib.GLTF2().load(str(glb))
+    attributes = doc.meshes[0].primitives[0].attributes
+    stretch = doc.accessors[attributes._STRETCH]
+    _, faces = read_ply(tshirt_run / "fit" / "fit_0002.ply")
+    assert 1.0 < stretch.max[0] <= faces["stretch_max"].max() + 1e-3  # a vertex's is the mean of its faces'
+    assert doc.accessors[attributes._PRESSURE].max[0] > 0.0
+    (usd,) = export(anim, "usda", tmp_path)
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(usd))
+    mesh = stage.GetPrimAtPath("/tailor/garment")
+    for name in ("stretch", "pressure"):
+        primvar = UsdGeom.PrimvarsAPI(mesh).GetPrimvar(name)
+        assert primvar.GetAttr().GetTimeSamples() == [0.0, 1.0, 2.0]
+        assert np.all(np.isfinite(primvar.Get(2.0)))
+    files = preview(anim, tmp_path / "pv", settings=PreviewSettings(colour="stretch", every=2), gif=False)
+    assert [f.name for f in files] == ["frame_0000.png", "frame_0002.png"]
+    with pytest.raises(Exception, match="gap"):
+        preview(anim, tmp_path / "pv2", settings=PreviewSettings(colour="gap"), gif=False)  # no body frames in this run

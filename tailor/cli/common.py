@@ -45,7 +45,8 @@ def _preview_settings(args):
         width, height = (int(v) for v in args.size.lower().split("x"))
     except ValueError:
         raise TailorError(f"--size: expected WIDTHxHEIGHT in pixels, got {args.size!r}") from None
-    return PreviewSettings(azimuth=args.azimuth, elevation=args.elevation, width=width, height=height, every=args.every)
+    return PreviewSettings(azimuth=args.azimuth, elevation=args.elevation, width=width, height=height, every=args.every,
+                           colour=args.color)
 
 
 def _preview(anim, out, args) -> list:
@@ -68,3 +69,6 @@ def preview_options(parser) -> None:
     parser.add_argument("--size", default="360x480", metavar="WxH", help="picture size in pixels (default 360x480)")
     parser.add_argument("--every", type=int, default=1, metavar="N", help="render every N-th frame (default 1)")
     parser.add_argument("--no-gif", action="store_true", help="only the PNG frames")
+    parser.add_argument("--color", default="panel", choices=["panel", "stretch", "pressure", "gap"],
+                        help="colour the garment by panel (default) or by its fit: stretch %%, contact pressure, "
+                             "gap to the body (gap needs the body: drape --with-body)")

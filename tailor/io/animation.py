@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import TailorError
 from .obj import read_obj, read_obj_vertices
 
-__all__ = ["Animation", "animation_from_drape", "read_run", "welded", "panel_colour", "mtl_text", "PANEL_COLOURS", "BODY_COLOUR"]
+__all__ = ["Animation", "animation_from_drape", "read_run", "read_loads", "LOADS_FILE", "welded", "panel_colour", "mtl_text", "PANEL_COLOURS", "BODY_COLOUR"]
 
 log = logging.getLogger(__name__)
 
@@ -63,6 +63,9 @@ class Animation:
     fps : float
     body_positions : (F, M, 3) float or None
     body_faces : (B, 3) int or None
+    contact_forces, attachment_forces : (F, N, 3) float or None
+        The force the body's contact and the attachments exert on each vertex per frame [N]
+        (a run's ``loads.npz``; None when unknown).
     """
 
     name: str
@@ -75,6 +78,8 @@ class Animation:
     fps: float = DEFAULT_FPS
     body_positions: np.ndarray | None = None
     body_faces: np.ndarray | None = None
+    contact_forces: np.ndarray | None = None
+    attachment_forces: np.ndarray | None = None
 
     @property
     def frame_count(self) -> int:
@@ -116,10 +121,34 @@ def animation_from_drape(result, *, with_body: bool = True) -> Animation:
     positions = np.stack([welded(result.weld, mesh.faces, x)[0] for x in result.frames])
     faces = result.weld[mesh.faces]
     body = np.stack(result.body_frames) if with_body and result.body_frames else None
+    loads = len(result.contact_forces) == len(result.frames) and len(result.frames) > 0
     return Animation(name=result.pattern.name, positions=positions, faces=faces, uv=np.asarray(mesh.uv),
                      face_uv=np.asarray(mesh.faces), face_group=np.asarray(mesh.face_panel),
                      group_names=tuple(mesh.panel_names), fps=float(result.report.fps),
-                     body_positions=body, body_faces=np.asarray(result.body_faces) if body is not None else None)
+                     body_positions=body, body_faces=np.asarray(result.body_faces) if body is not None else None,
+                     contact_forces=np.stack(result.contact_forces) if loads else None,
+                     attachment_forces=np.stack(result.attachment_forces) if loads else None)
+
+
+LOADS_FILE = "loads.npz"
+"""A run folder's per-frame contact and attachment forces (``contact_NNNN``, ``attachment_NNNN``, N)."""
+
+
+def read_loads(folder: Path, frames: int, vertices: int):
+    """(contact, attachment) forces, each (frames, vertices, 3) [N], of a run folder; (None, None)
+    if it has no :data:`LOADS_FILE` (a run of an older tailor)."""
+    path = folder / LOADS_FILE
+    if not path.exists():
+        return None, None
+    try:
+        with np.load(path) as data:
+            contact = np.stack([data[f"contact_{k:04d}"] for k in range(frames)]).astype(float)
+            attached = np.stack([data[f"attachment_{k:04d}"] for k in range(frames)]).astype(float)
+    except (KeyError, ValueError, OSError) as exc:
+        raise TailorError(f"{path}: unreadable or incomplete ({exc})") from None
+    if contact.shape != (frames, vertices, 3) or attached.shape != contact.shape:
+        raise TailorError(f"{path}: forces of shape {contact.shape}, but the run has {frames} frames of {vertices} vertices")
+    return contact, attached
 
 
 def _numbered(folder: Path, stem: str) -> list[Path]:
@@ -169,6 +198,7 @@ def read_run(run_dir, *, with_body: bool = True) -> Animation:
         body = np.stack(frames)
         body_faces = b0.faces
     log.debug("read %s: %d frames, %d vertices, body %s", folder, len(files), len(first.vertices), body is not None)
+    contact, attached = read_loads(folder, len(files), len(first.vertices))
     return Animation(name=name, positions=np.stack(positions), faces=first.faces, uv=first.uv, face_uv=first.face_uv,
                      face_group=first.face_group, group_names=first.group_names, fps=fps,
-                     body_positions=body, body_faces=body_faces)
+                     body_positions=body, body_faces=body_faces, contact_forces=contact, attachment_forces=attached)

@@ -20,7 +20,8 @@ from ..errors import TailorError
 from .animation import BODY_COLOUR
 from .atomic import atomic_write, write_text_atomic
 
-__all__ = ["write_ply", "write_fit", "strain_picture", "pressure_picture", "BANDS", "BAND_COLOURS"]
+__all__ = ["write_ply", "write_fit", "strain_picture", "pressure_picture", "nice_top", "band_colours", "BANDS",
+           "BAND_COLOURS"]
 
 BANDS = 8
 """Colour bands of a strain or pressure picture."""
@@ -101,18 +102,24 @@ def strain_picture(path, fit, body=None, maximum: float | None = None) -> None:
              f"strain map, frame {fit.frame}")
 
 
-def pressure_scale(fit) -> float:
-    """Top of the pressure picture's scale [kPa]: the 99th percentile of the contact pressures
-    rounded up to 1, 2 or 5 × a power of ten (at least 0.01 kPa)."""
-    p = fit.pressure_kpa[fit.pressure_kpa > 0]
-    top = float(np.percentile(p, 99)) if len(p) else 0.01
-    e = 10.0 ** np.floor(np.log10(max(top, 0.01)))
-    return float(next(m * e for m in (1, 2, 5, 10) if m * e >= top - 1e-12))
+def nice_top(values, floor: float = 0.01) -> float:
+    """Top of a colour scale: the 99th percentile of the positive ``values`` rounded up to a round
+    number (1, 1.5, 2, 3, 4, 5, 6 or 8 × a power of ten; at least ``floor``)."""
+    v = np.asarray(values, float)
+    v = v[v > 0]
+    top = max(float(np.percentile(v, 99)) if len(v) else floor, floor)
+    e = 10.0 ** np.floor(np.log10(top))
+    return float(next(m * e for m in (1, 1.5, 2, 3, 4, 5, 6, 8, 10) if m * e >= top * (1 - 1e-12)))
+
+
+def band_colours(values, top):
+    """RGB per value: its band of :data:`BANDS` between 0 and ``top`` (per value or one), clipped."""
+    return _band_colours(values, top)
 
 
 def pressure_picture(path, fit, body=None) -> None:
     """The pressure map (per face, the mean of its vertices' pressure), front and back."""
-    top = pressure_scale(fit)
+    top = nice_top(fit.pressure_kpa)
     face = fit.pressure_kpa[fit.faces].mean(axis=1)
     _picture(path, fit, body, _band_colours(face, top), _bar(top, "contact pressure, kPa"),
              f"pressure map, frame {fit.frame}")

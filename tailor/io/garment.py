@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import TailorError
-from .animation import mtl_text, welded
+from .animation import LOADS_FILE, mtl_text, welded
 from .obj import obj_text
 
 __all__ = ["write_drape"]
@@ -46,7 +46,7 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
         if result.contact_forces:
             loads = {f"contact_{k:04d}": c for k, c in enumerate(result.contact_forces)}
             loads.update({f"attachment_{k:04d}": a for k, a in enumerate(result.attachment_forces)})
-            np.savez_compressed(tmp / "loads.npz", **loads)
+            np.savez_compressed(tmp / LOADS_FILE, **loads)
         report = result.report.to_json()
         report["pattern"] = result.pattern.source
         report["name"] = result.pattern.name

@@ -72,12 +72,15 @@ class _Buffer:
         return b"".join(self.chunks)
 
 
-def _morph_mesh(buf, frames, split, groups, uv=None, colour_of=None, name="mesh"):
-    """Add a mesh whose glTF vertex j is ``frames[:, split[j]]``; returns (mesh dict, target count)."""
+def _morph_mesh(buf, frames, split, groups, uv=None, colour_of=None, name="mesh", scalars=None):
+    """Add a mesh whose glTF vertex j is ``frames[:, split[j]]``; returns (mesh dict, target count).
+    ``scalars``: {attribute name: (N,) per original vertex} added as SCALAR float attributes."""
     base = to_y_up(frames[0][split]).astype(np.float32)
     attributes = {"POSITION": buf.add(base, "VEC3", _ARRAY_BUFFER, bounds=True)}
     if uv is not None:
         attributes["TEXCOORD_0"] = buf.add(uv.astype(np.float32), "VEC2", _ARRAY_BUFFER)
+    for key, values in (scalars or {}).items():
+        attributes[key] = buf.add(np.asarray(values, np.float32)[split], "SCALAR", _ARRAY_BUFFER, bounds=True)
     targets = []
     for frame in frames[1:]:
         delta = to_y_up(frame[split]).astype(np.float32) - base
@@ -107,11 +110,25 @@ def _weights_animation(buf, frame_count: int, fps: float, node: int):
     return sampler, {"target": {"node": node, "path": "weights"}}
 
 
+def _fit_attributes(anim) -> dict:
+    """The garment's fit of its last frame as glTF application attributes: ``_STRETCH`` [%] and, when the
+    drape recorded its loads, ``_PRESSURE`` [kPa] (:func:`tailor.fit.vertex_field`). glTF animates only
+    positions by morph targets, so these are the last frame's (the mesh's ``extras.fit_frame``)."""
+    from ..fit import vertex_field
+
+    k = anim.frame_count - 1
+    out = {"_STRETCH": vertex_field(anim, k, "stretch")}
+    if anim.contact_forces is not None:
+        out["_PRESSURE"] = vertex_field(anim, k, "pressure")
+    return out
+
+
 def write_glb(path, anim, *, with_body: bool = True) -> None:
     """Write ``anim`` (:class:`~tailor.io.animation.Animation`) as a GLB file, atomically.
 
     The garment (and the body if ``with_body`` and the animation has one) animate by morph
-    targets at ``anim.fps``. Non-finite positions are refused.
+    targets at ``anim.fps``; the garment carries its last frame's fit (:func:`_fit_attributes`).
+    Non-finite positions are refused.
     """
     anim.check_finite()
     buf = _Buffer()
@@ -124,7 +141,9 @@ def write_glb(path, anim, *, with_body: bool = True) -> None:
                                                           "metallicFactor": 0.0, "roughnessFactor": 0.9},
                   "doubleSided": True} for i, name in enumerate(anim.group_names)]
     groups = [(g, tri[anim.face_group == g]) for g in range(len(anim.group_names)) if np.any(anim.face_group == g)]
-    garment, n_targets = _morph_mesh(buf, anim.positions, unique[:, 0], groups, uv=uv, name=anim.name)
+    garment, n_targets = _morph_mesh(buf, anim.positions, unique[:, 0], groups, uv=uv, name=anim.name,
+                                     scalars=_fit_attributes(anim))
+    garment.setdefault("extras", {})["fit_frame"] = anim.frame_count - 1
     meshes, nodes = [garment], [{"name": anim.name, "mesh": 0}]
     samplers, channels = [], []
     if n_targets:

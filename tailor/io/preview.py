@@ -41,13 +41,18 @@ class PreviewSettings:
     """How previews look: camera angles in degrees (as in files), picture size in pixels."""
 
     def __init__(self, azimuth: float = -30.0, elevation: float = 10.0, width: int = 360, height: int = 480,
-                 every: int = 1):
+                 every: int = 1, colour: str = "panel"):
+        from ..fit import VERTEX_FIELDS
+
         if width < 16 or height < 16:
             raise TailorError("preview size: width and height must be at least 16 pixels")
         if every < 1:
             raise TailorError("preview --every must be at least 1")
+        if colour not in ("panel", *VERTEX_FIELDS):
+            raise TailorError(f"preview --color: choose panel or one of {', '.join(VERTEX_FIELDS)}, got {colour!r}")
         self.azimuth, self.elevation = np.radians(azimuth), np.radians(elevation)
         self.width, self.height, self.every = int(width), int(height), int(every)
+        self.colour = colour
 
 
 def _shaded(x, faces, rgb, basis, cull: bool):
@@ -68,8 +73,24 @@ def _shaded(x, faces, rgb, basis, cull: bool):
     return xy, colours, p.mean(axis=1) @ view
 
 
-def _meshes(anim: Animation, k: int):
-    garment_rgb = np.array([panel_colour(g) for g in range(len(anim.group_names))])[anim.face_group]
+UNITS = {"stretch": "%", "pressure": "kPa", "gap": "mm"}
+
+
+def _fit_colours(anim: Animation, frames, field: str):
+    """Per frame rendered, the garment's face colours by a fit field (the mean of its vertices', in
+    8 bands from 0 to one top for the whole animation: :func:`~tailor.io.fit_files.nice_top`), and
+    the legend's text."""
+    from ..fit import vertex_field
+    from .fit_files import band_colours, nice_top
+
+    values = {k: vertex_field(anim, k, field)[anim.faces].mean(axis=1) for k in frames}
+    top = nice_top(np.concatenate(list(values.values())))
+    return {k: band_colours(v, top) for k, v in values.items()}, f"{field} 0-{top:g} {UNITS[field]}, blue to red"
+
+
+def _meshes(anim: Animation, k: int, garment_rgb=None):
+    if garment_rgb is None:
+        garment_rgb = np.array([panel_colour(g) for g in range(len(anim.group_names))])[anim.face_group]
     out = []
     if anim.has_body:
         out.append((anim.body_positions[k], anim.body_faces, np.tile(BODY_COLOUR, (len(anim.body_faces), 1)), True))
@@ -109,12 +130,15 @@ def preview(anim: Animation, out_dir, *, settings: PreviewSettings | None = None
     fig.patch.set_facecolor("white")
     poly = PolyCollection([], linewidths=0.3, antialiased=True)
     ax.add_collection(poly)
+    colours_of, legend = ({}, None) if s.colour == "panel" else _fit_colours(anim, frames, s.colour)
+    if legend:
+        ax.text(0.02, 0.02, legend, transform=ax.transAxes, fontsize=7)
     out = Path(out_dir)
     written, images = [], []
     try:
         for i, k in enumerate(frames):
             xy, colours, depth = zip(*(_shaded(np.asarray(x), np.asarray(f), rgb, basis, cull)
-                                       for x, f, rgb, cull in _meshes(anim, k)))
+                                       for x, f, rgb, cull in _meshes(anim, k, colours_of.get(k))))
             # the garment lies on the body: sorting by centroid alone lets small body triangles
             # under a large cloth triangle win; a garment face is drawn over body faces within 2 cm
             depth = depth[:-1] + (depth[-1] - GARMENT_DEPTH_BIAS,)

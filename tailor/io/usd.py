@@ -68,6 +68,21 @@ def _types():
     return Sdf.ValueTypeNames
 
 
+def _fit_primvars(mesh, anim) -> None:
+    """``primvars:stretch`` [%] and, when the drape recorded its loads, ``primvars:pressure`` [kPa]
+    per vertex, sampled at every frame (:func:`tailor.fit.vertex_field`)."""
+    from pxr import UsdGeom, Vt
+
+    from ..fit import vertex_field
+
+    names = ("stretch", "pressure") if anim.contact_forces is not None else ("stretch",)
+    for name in names:
+        primvar = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(name, _types().FloatArray, UsdGeom.Tokens.vertex)
+        for k in range(anim.frame_count):
+            values = np.ascontiguousarray(vertex_field(anim, k, name), dtype=np.float32)
+            primvar.Set(Vt.FloatArray.FromNumpy(values), float(k))
+
+
 def write_usd(path, anim, *, with_body: bool = True) -> None:
     """Write ``anim`` (:class:`~tailor.io.animation.Animation`) as a USD stage, atomically.
 
@@ -93,6 +108,7 @@ def write_usd(path, anim, *, with_body: bool = True) -> None:
     st = UsdGeom.PrimvarsAPI(garment).CreatePrimvar("st", _types().TexCoord2fArray, UsdGeom.Tokens.faceVarying)
     st.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(anim.uv, dtype=np.float32)))
     st.SetIndices(Vt.IntArray.FromNumpy(np.ascontiguousarray(anim.face_uv, np.int32).ravel()))
+    _fit_primvars(garment, anim)
     taken: set = set()
     for g, name in enumerate(anim.group_names):
         faces = np.flatnonzero(anim.face_group == g).astype(np.int32)
