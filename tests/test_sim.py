@@ -23,7 +23,7 @@ class _Recorder:
     def predict(self, *args):
         return None
 
-    def respond(self, model, state, dt, impulses):
+    def respond(self, model, state, dt, impulses, support):
         self.calls.append("respond")
 
 

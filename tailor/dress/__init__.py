@@ -9,11 +9,12 @@ Nothing here writes files: frames go to the caller (``on_frame``) and into the r
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import replace
 
-from ..collide import BodyCollider, InsideTest
+from ..collide import BodyCollider, InsideTest, edge_crossings
 from ..contact import ContactPipeline, body_margin
 from ..integrators import make_integrator
 from ..measure import measure_body
@@ -26,6 +27,8 @@ from .options import DRAPE_RESOLUTION, DrapeOptions
 from .phases import Dressing, animate, settle, sew, transition
 from .report import DrapeProgress, DrapeReport, DrapeResult, PhaseReport
 from .timeline import Timeline
+
+log = logging.getLogger(__name__)
 
 __all__ = ["drape", "prepare", "DrapeResult", "DrapeReport", "DrapeProgress", "DrapeOptions", "PhaseReport", "DRAPE_RESOLUTION"]
 
@@ -74,6 +77,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
         opts = replace(options, **kwargs, **({"fabric": fabric} if fabric is not None else {}))
     d, loops, x0 = prepare(pattern, body, opts, on_frame, progress)
     report = _header(d, pattern, body, loops, opts)
+    report.placement_crossings = _placement_crossings(x0, d.garment.mesh, pattern)
     state, report.phases["sewing"] = sew(d, x0)
     state, report.phases["settling"] = settle(d, state)
     state, phase = transition(d, state)
@@ -107,6 +111,17 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
                                self_collision=opts.self_collision)
     d = Dressing(opts, garment, timeline, contacts, integ, q, walls=walls, on_frame=on_frame, progress=progress)
     return d, loops, x0
+
+
+def _placement_crossings(x0, mesh, pattern) -> int:
+    """Edges of the placed, unsewn panels that pass through a panel's triangle (0: placement starts
+    no panel through another); logged as a warning when there are any."""
+    crossings = edge_crossings(x0, mesh.faces)
+    if len(crossings):
+        panels = sorted({pattern.panels[p].name for p in mesh.vertex_panel[crossings[:, :2].ravel()]})
+        log.warning("%s: %d edges of the placed panels pass through other panels (%s) before sewing; "
+                    "check their placements", pattern.source, len(crossings), ", ".join(panels))
+    return int(len(crossings))
 
 
 def _header(d: Dressing, pattern, body, loops, opts: DrapeOptions) -> DrapeReport:

@@ -76,6 +76,7 @@ class DrapeReport:
     max_penetration_m_per_frame: list = field(default_factory=list)
     max_penetration_m: float = 0.0
     crossings_per_frame: list = field(default_factory=list)  # edges through a triangle of the garment (tailor.collide.edge_crossings)
+    placement_crossings: int = 0  # ... of the placed panels, before sewing
     wall_s: float = 0.0
     steps: int = 0
     cg_iterations: int = 0
