@@ -223,6 +223,20 @@ class LimbWalls:
         """(N,) wall of each vertex of ``mesh`` (a garment mesh of the pattern, possibly cut), −1 for none."""
         return self.panel[mesh.vertex_panel]
 
+    def separate(self, x, mesh, margin: float) -> np.ndarray:
+        """Placed positions ``x`` (rest pose) with every point of a wall's panels that reaches across
+        the wall, or nearer it than ``margin``, moved onto its own side at ``margin``: the two legs'
+        rolled panels overlap between the legs and up to the crotch, and placement must not start
+        them through each other. At every height: above the landmark the two halves meet at the
+        wall too (the centre seams)."""
+        out = np.array(x, float)
+        of = self.of(mesh)
+        for w in range(self.count):
+            ids = np.flatnonzero(of == w)
+            depth = margin - (out[ids] @ self.normal[w] - self.normal[w] @ self.point[w])
+            out[ids[depth > 0]] += depth[depth > 0, None] * self.normal[w]
+        return out
+
     def at(self, body_x=None, body_v=None):
         """(normals (W, 3), offsets n·p (W,), heights (W,), normal speeds (W,)) with the body at ``body_x``.
 

@@ -190,6 +190,7 @@ def test_trouser_legs_are_sewn_without_crossing_each_other(mannequin):
     pattern = read_pattern(PANELS / "trousers.json")
     sewn = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2)
     assert sewn.report.crossings_per_frame == [0]
+    assert sewn.report.placement_crossings == 0  # placed with each leg on its side of the midplane too
     x = sewn.frames[0]
     for name, sign in (("front_left", 1), ("back_right", -1)):
         legs = sewn.mesh.panel_vertices(pattern.panel_index(name))
@@ -197,6 +198,7 @@ def test_trouser_legs_are_sewn_without_crossing_each_other(mannequin):
         assert (sign * x[low, 0] > 0).all()  # below the crotch, each leg on its own side
     crossed = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2, limb_walls=False)
     assert crossed.report.crossings_per_frame[0] > 10
+    assert crossed.report.placement_crossings > 10  # the rolled legs overlap: placement says so
 
 
 @pytest.mark.slow

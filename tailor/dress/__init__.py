@@ -105,6 +105,8 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     x0 = place_panels(pattern, mesh, landmarks, inside=InsideTest(timeline.pose, body.faces))
     walls = limb_walls(pattern, landmarks, timeline.pose) if opts.limb_walls else None
     garment = Garment(pattern, mesh, fabrics, merge_distance=max(0.3 * opts.resolution, 0.002))
+    if walls is not None and walls.count:
+        x0 = walls.separate(x0, mesh, garment.thickness)
     collider = BodyCollider(timeline.collider_frames, body.faces, margin=body_margin(garment.thickness))
     timeline.follow_collider(collider.margin)
     contacts = ContactPipeline(collider, timeline, thickness=garment.thickness, friction=garment.friction,
