@@ -53,7 +53,8 @@ class ContactSettings:
     hold : bool
         Hand resting body contacts to the next implicit step and predict landings within it.
     self_collision : bool
-        Whether cloth–cloth contact acts (not while sewing: seam edges must be free to meet).
+        Whether cloth–cloth contact acts (while sewing it leaves the open seams and their
+        neighbours free, :meth:`ContactPipeline.respond`: seam edges must be free to meet).
     """
 
     friction_scale: float = 1.0
@@ -252,7 +253,31 @@ class ContactPipeline:
             response = (state.v - v0) * np.asarray(model.vertex_mass)[:, None]
         self.loads.add(model, dt, support, response)
         if self.self_mode != "off" and self.settings.self_collision:
-            self.self_collider(model, state.x).respond(self._inv_mass, state, dt)
+            collider = self.self_collider(model, state.x)
+            collider.ignore(self._open_seams(model))
+            collider.respond(self._inv_mass, state, dt)
+
+    def _open_seams(self, model):
+        """(N,) bool: the vertices of the open seam pairs and their neighbours (None: none open), which
+        the self-collision leaves free while sewing so that each seam's two sides meet edge to edge."""
+        pairs = model.pair_vertices
+        if not len(pairs):
+            return None
+        ptr, nbr = self._neighbours(model)
+        mask = np.zeros(model.vertex_count, bool)
+        mask[pairs.ravel()] = True
+        ids = np.flatnonzero(mask)
+        lens = ptr[ids + 1] - ptr[ids]
+        rows = np.repeat(ptr[ids] - np.concatenate([[0], np.cumsum(lens)[:-1]]), lens) + np.arange(lens.sum())
+        mask[nbr[rows]] = True
+        return mask
+
+    def _neighbours(self, model):
+        """Each vertex's neighbours across an edge (CSR), for ``model``'s numbering (kept for untangling too)."""
+        key = (model.vertex_count, self._version)
+        if self._rings is None or self._rings[0] != key:
+            self._rings = (key, vertex_rings(model.faces, model.vertex_count))
+        return self._rings[1]
 
     def self_collider(self, model, x) -> SelfCollider:
         """The self-collider of ``model``'s numbering, built from positions ``x`` when it changed."""
@@ -275,10 +300,9 @@ class ContactPipeline:
         if self.self_mode == "off":
             return 0, 0
         key = (model.vertex_count, self._version)
-        if self._rings is None or self._rings[0] != key:
-            self._rings = (key, vertex_rings(model.faces, model.vertex_count))
+        rings = self._neighbours(model)
         inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
-        found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=self._rings[1])
+        found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=rings)
         if found:
             if self._self is not None and self._self_key == key:
                 self._self.moved(state.x)

@@ -73,12 +73,12 @@ def test_validate_rejects_an_unknown_fabric_model_before_running(tmp_path, capsy
     assert not (tmp_path / "v").exists()
 
 
-def test_drape_warns_on_stderr_of_crossings_untangling_could_not_undo(tmp_path, capsys):
-    # the circle skirt at 4 cm keeps a knot of a few crossings at its hem (tests/test_dress.py)
-    out = tmp_path / "run"
-    assert main(["drape", str(PANELS / "circle_skirt.json"), "--body", "mannequin-walk", "--resolution", "4",
-                 "--frames", "2", "--out", str(out)]) == 0
-    err = capsys.readouterr().err
-    crossings = json.loads((out / "report.json").read_text())["crossings_per_frame"]
-    assert max(crossings) > 0
-    assert "warning: cloth passes through cloth: 2 of 2 frames" in err and "untangling could not undo" in err
+def test_drape_warns_of_frames_where_cloth_passes_through_cloth():
+    # no shipped garment keeps a crossing any more (tests/test_dress.py): the warning's text alone
+    from tailor.cli.drape import crossing_warning
+
+    assert crossing_warning([0, 0, 0], "auto") is None
+    text = crossing_warning([0, 3, 7, 0], "auto")
+    assert text.startswith("tailor: warning: cloth passes through cloth: 2 of 4 frames")
+    assert "most: 7 in frame 2" in text and "untangling could not undo" in text and "\n" not in text
+    assert "self-collision is off" in crossing_warning([1], "off")

@@ -173,3 +173,19 @@ def test_edge_crossings_find_every_intersecting_triangle_pair_and_ignore_neighbo
         v = rng.uniform(0, 1, (6, 3))
         pairs = len(self_intersections(v, [[0, 1, 2], [3, 4, 5]]))
         assert (len(edge_crossings(v, [[0, 1, 2], [3, 4, 5]])) > 0) == (pairs > 0)
+
+
+def test_ignored_vertices_take_no_part_in_any_contact():
+    """While sewing, the open seams and their neighbours are left free (their two sides must meet
+    edge to edge); the rest of the panels keep each other out."""
+    model, x0 = stacked(0.002, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    v0 = np.zeros_like(x0)
+    v0[upper, 2] = -1.0  # the upper panel falls onto the lower one
+    counts = []
+    for ignored in (None, upper, ~upper, np.zeros(len(x0), bool)):
+        state = model.state(x0.copy(), v0.copy())
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+        collider.ignore(ignored)
+        counts.append(collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01))
+    assert counts[0] > 0 and counts[1] == 0 and counts[2] == 0 and counts[3] == counts[0]

@@ -83,14 +83,21 @@ def _cmd_drape(args) -> int:
           + f"{time.perf_counter() - t0:.1f} s -> {out}/")
     if fits:
         print(describe(fits, out / "fit"))
-    crossings = r.crossings_per_frame
-    if max(crossings, default=0):
-        worst = max(range(len(crossings)), key=crossings.__getitem__)
-        print(f"tailor: warning: cloth passes through cloth: {sum(c > 0 for c in crossings)} of {len(crossings)} frames "
-              f"have edges through triangles that untangling could not undo (most: {crossings[worst]} in frame {worst}; "
-              f"report.json crossings_per_frame)",
-              file=sys.stderr)
+    warning = crossing_warning(r.crossings_per_frame, args.self_collision)
+    if warning:
+        print(warning, file=sys.stderr)
     return 0
+
+
+def crossing_warning(crossings, self_collision: str) -> str | None:
+    """The warning for frames whose cloth passes through itself (None: no frame does)."""
+    if not max(crossings, default=0):
+        return None
+    worst = max(range(len(crossings)), key=crossings.__getitem__)
+    why = "self-collision is off" if self_collision == "off" else "untangling could not undo them"
+    return (f"tailor: warning: cloth passes through cloth: {sum(c > 0 for c in crossings)} of {len(crossings)} frames "
+            f"have edges through triangles ({why}; most: {crossings[worst]} in frame {worst}; "
+            f"report.json crossings_per_frame)")
 
 
 class PhaseBars:

@@ -120,6 +120,7 @@ class SelfCollider:
         self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
         self._x_prev = None
+        self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1,
                       "query_s": 0.0, "response_s": 0.0}
 
@@ -227,18 +228,40 @@ class SelfCollider:
             # (ignoring those, a strip crumpling over one or two triangles passed through itself)
             vertex, tri, near = vertex_triangle_pairs(verts, faces, self.faces, lo, hi, x, radius, self._grid_cell,
                                                       self._ring_csr, exact=swept is None)
+            if self.edges:
+                self._ee, self._ee_near = edge_edge_pairs(unique_ints(self._face_edges[faces].ravel()), self._edges, lo,
+                                                          hi, radius, self._grid_cell, self._ring_csr)
+            vertex, tri, near = self._drop_ignored(vertex, tri, near)
             order = np.lexsort((tri, vertex))
             vertex, tri, self._tri_near = vertex[order], tri[order], near[order]
             self._vtx = np.ascontiguousarray(vertex, dtype=np.int64)
             self._tri = tri
-            if self.edges:
-                self._ee, self._ee_near = edge_edge_pairs(unique_ints(self._face_edges[faces].ravel()), self._edges, lo,
-                                                          hi, radius, self._grid_cell, self._ring_csr)
             self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
             self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
         self._anchor = x.copy()
         self.stats["queries"] += 1
         self.stats["query_s"] += time.perf_counter() - t0
+
+    def ignore(self, vertices) -> None:
+        """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact, as a
+        vertex, a triangle's corner or an edge's end: the open seams while sewing, whose two sides
+        must be free to meet edge to edge; the rest of the panels keep each other out."""
+        mask = None if vertices is None or not np.any(vertices) else np.asarray(vertices, bool)
+        same = (mask is None and self._ignored is None) or (
+            mask is not None and self._ignored is not None and np.array_equal(mask, self._ignored))
+        if not same:
+            self._ignored = mask
+            self._anchor = None  # query again
+
+    def _drop_ignored(self, vertex, tri, near):
+        """The vertex–triangle and edge–edge candidates without the ignored vertices."""
+        if self._ignored is None:
+            return vertex, tri, near
+        keep = ~self._ignored[vertex] & ~self._ignored[self.faces[tri]].any(axis=1)
+        if len(self._ee):
+            ee = ~self._ignored[self._ee].any(axis=1)
+            self._ee, self._ee_near = self._ee[ee], self._ee_near[ee]
+        return vertex[keep], tri[keep], near[keep]
 
     @property
     def candidate_pairs(self) -> int:

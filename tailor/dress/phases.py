@@ -2,7 +2,8 @@
 
 1. :func:`sew` — body still, gravity off, seaming forces (Eq. 15) pull the placed panels together
    and pairs merge (Eq. 16–18) until every seam is closed, or a time-out raises
-   :class:`~tailor.errors.SimulationError` naming the widest open seam;
+   :class:`~tailor.errors.SimulationError` naming the widest open seam; the panels keep each other
+   out (self-collision) except along the open seams;
 2. :func:`settle` — gravity on, attachments hold (Eq. 19–20), the garment comes to rest;
    from here on (and at every weld) the cloth's crossings through itself are untangled every frame
    (:meth:`~tailor.contact.ContactPipeline.untangle`);
