@@ -20,7 +20,7 @@ LAYERS = {
     "io": 8, "fit": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9, "batch": 9, "validate": 9, "corpus": 9,
 }
 OWNERS = {"triangle": {"mesh"}, "fcl": {"collide"}, "meshio": {"io"}, "skimage": {"mannequin"}, "matplotlib": {"io"},
-          "pxr": {"io"}, "PIL": {"io"}, "tqdm": {"cli"}, "yaml": {"io"},
+          "pxr": {"io"}, "PIL": {"io"}, "ezdxf": {"io"}, "tqdm": {"cli"}, "yaml": {"io"},
           "distributed": {"batch"}, "dask": {"batch"}}
 
 

@@ -15,6 +15,7 @@ import sys
 from ..errors import TailorError
 from .body import add_body_commands
 from .drape import add_drape_command
+from .dxf import add_import_command
 from .fit import add_fit_command
 from .output import add_output_commands
 from .pattern import add_pattern_commands
@@ -29,6 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="only errors")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     add_pattern_commands(sub)
+    add_import_command(sub)
     add_body_commands(sub)
     add_drape_command(sub)
     add_fit_command(sub)

@@ -1,0 +1,43 @@
+"""``tailor import``: a pattern from pattern-making CAD (DXF in the AAMA / ASTM D6673 layout)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..errors import TailorError
+
+
+def _cmd_import(args) -> int:
+    from ..io import pattern_from_dict
+    from ..io.atomic import write_text_atomic
+    from ..io.dxf import read_dxf
+    from ..io.dxf_pattern import pieces_to_pattern
+
+    source = Path(args.file)
+    out = Path(args.out)
+    if out.suffix.lower() != ".json":
+        raise TailorError(f"--out {out}: a pattern file ends in .json")
+    pieces, notes = read_dxf(source, units=args.units, size=args.size)
+    doc, more = pieces_to_pattern(pieces, out.stem, seams=args.seams)
+    doc["description"] = f"imported from {source.name}"
+    pattern = pattern_from_dict(doc, source=str(out))  # what it would read back, checked before writing
+    write_text_atomic(out, json.dumps(doc, indent=1))
+    area = sum(p.area for p in pattern.panels) * 1e4
+    print(f"{source}: {len(pattern.panels)} pieces, {area:.0f} cm² in all, {len(pattern.seams)} seams, "
+          f"{len(pattern.attachments)} attachments -> {out}")
+    for note in notes + more:
+        print(f"  {note}")
+    return 0
+
+
+def add_import_command(sub) -> None:
+    """import."""
+    i = sub.add_parser("import", help="a pattern from CAD: DXF in the AAMA / ASTM D6673 layout (needs ezdxf)")
+    i.add_argument("file", metavar="FILE.dxf")
+    i.add_argument("--out", required=True, metavar="PATTERN.json", help="the pattern file to write")
+    i.add_argument("--units", choices=["mm", "cm", "in", "m"], help="the file's units (default: from the file, else mm)")
+    i.add_argument("--size", metavar="S", help="the size to read from a graded file (default: the first)")
+    i.add_argument("--seams", choices=["auto", "none"], default="auto",
+                   help="auto (default): sew notched sides of equal length and matching notches; none: no seams")
+    i.set_defaults(func=_cmd_import)

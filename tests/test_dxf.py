@@ -1,0 +1,123 @@
+"""Patterns from CAD: AAMA / ASTM DXF files from several exporters' dialects import with their
+pieces, areas and seams, and drape without hand editing; broken files give one line and exit 2."""
+
+
+import numpy as np
+import pytest
+
+from tailor import drape, read_pattern
+from tailor.cli import main
+from tailor.io.body_files import read_body
+
+pytest.importorskip("ezdxf")
+
+from dxf_files import FOUR_GORES, gore_outline, write_aama  # noqa: E402
+
+SEWN = {frozenset(("Front Left", "Back Left")), frozenset(("Front Right", "Back Right")),
+        frozenset(("Front Left", "Front Right")), frozenset(("Back Left", "Back Right"))}
+
+
+def _gore_area_cm2():
+    p, _ = gore_outline(points=201)
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _import(tmp_path, capsys=None, *args, **dialect):
+    dxf = write_aama(tmp_path / "skirt.dxf", **dialect)
+    out = tmp_path / "skirt.json"
+    assert main(["import", str(dxf), "--out", str(out), *args]) == 0
+    return read_pattern(out)
+
+
+def _sewn(pattern):
+    return {frozenset((s.a.panel, s.b.panel)) for s in pattern.seams}
+
+
+@pytest.mark.parametrize("dialect", [
+    {}, {"lwpolyline": False}, {"notch_points": True}, {"turn_points": False},
+    {"scale": 1 / 2.54, "units_text": "ENGLISH"}, {"scale": 1.0, "units_text": None, "insunits": 5}],
+    ids=["lwpolyline-mm", "polyline-r12", "notch-points", "no-turn-points", "inches", "cm-header"])
+def test_every_dialect_imports_the_pieces_their_areas_and_seams(tmp_path, dialect):
+    pattern = _import(tmp_path, **dialect)
+    assert [p.name for p in pattern.panels] == list(FOUR_GORES)
+    for panel in pattern.panels:
+        assert panel.area * 1e4 == pytest.approx(_gore_area_cm2(), rel=0.01)
+        assert panel.grain == pytest.approx(np.pi / 2)
+    assert _sewn(pattern) == SEWN and len(pattern.seams) == 4
+
+
+def test_a_four_gore_skirt_drafted_in_dxf_drapes_in_one_piece(tmp_path):
+    pattern = _import(tmp_path)
+    assert {a.panel for a in pattern.attachments} == set(FOUR_GORES)  # no waistband: held at the waist
+    result = drape(pattern, read_body("mannequin"), frames=2, resolution=0.04)
+    welded = int(result.weld.max()) + 1
+    assert welded < result.mesh.vertex_count  # the seams were sewn
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    f = result.weld[result.mesh.faces]
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]]])
+    pieces, _ = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(welded, welded)))
+    assert pieces == 1
+    assert result.report.max_penetration_m <= 0.002 and max(result.report.crossings_per_frame) == 0
+
+
+def test_a_pair_becomes_two_mirrored_panels(tmp_path):
+    pattern = _import(tmp_path, pieces={"Front": ([20.0], [35.0]), "Back": ([35.0], [20.0, 21.0])}, quantity=2)
+    names = [p.name for p in pattern.panels]
+    assert names == ["Front", "Front_2", "Back", "Back_2"]
+    a, b = pattern.panels[0], pattern.panels[1]
+    assert b.area == pytest.approx(a.area, rel=1e-6)
+    assert len(pattern.seams) == 4  # each front to a back at the side, each piece to its copy at the centre
+
+
+def test_a_graded_file_reads_one_size(tmp_path, capsys):
+    medium = _import(tmp_path, sizes=("M", "L"))
+    assert len(medium.panels) == 4 and "sizes M, L in the file" in capsys.readouterr().out
+    large = _import(tmp_path, None, "--size", "L", sizes=("M", "L"))
+    assert large.panels[0].area > 1.02 * medium.panels[0].area
+    dxf = tmp_path / "skirt.dxf"
+    assert main(["import", str(dxf), "--out", str(tmp_path / "x.json"), "--size", "XL"]) == 2
+    assert "--size XL: the file has sizes M, L" in capsys.readouterr().err
+
+
+def _broken(tmp_path, kind):
+    import ezdxf
+
+    path = tmp_path / f"{kind}.dxf"
+    if kind == "empty":
+        path.write_text("")
+    elif kind == "truncated":
+        write_aama(path)
+        path.write_bytes(path.read_bytes()[:2000])
+    else:
+        doc = ezdxf.new("R2000")
+        block = doc.blocks.new("P0")
+        if kind == "no-boundary":
+            block.add_line((0, 0), (100, 0), dxfattribs={"layer": "1"})
+        else:  # a bow tie
+            block.add_lwpolyline([(0, 0), (100, 100), (100, 0), (0, 100)], close=True, dxfattribs={"layer": "1"})
+        doc.modelspace().add_blockref("P0", (0, 0))
+        doc.saveas(path)
+    return path
+
+
+@pytest.mark.parametrize("kind, words", [("empty", "no pattern pieces"), ("truncated", ""),
+                                         ("no-boundary", "no boundary on layer 1"), ("bow-tie", "P0")])
+def test_a_broken_file_gives_one_line_and_exit_2(tmp_path, capsys, kind, words):
+    path = _broken(tmp_path, kind)
+    out = tmp_path / "out.json"
+    assert main(["import", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("tailor: error: ") and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert words in err and not out.exists()
+
+
+def test_without_ezdxf_import_says_how_to_install_it(tmp_path, capsys, monkeypatch):
+    import sys
+
+    dxf = write_aama(tmp_path / "skirt.dxf")
+    monkeypatch.setitem(sys.modules, "ezdxf", None)
+    assert main(["import", str(dxf), "--out", str(tmp_path / "s.json")]) == 2
+    assert 'pip install -e ".[dxf]"' in capsys.readouterr().err
