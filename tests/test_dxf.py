@@ -121,3 +121,55 @@ def test_without_ezdxf_import_says_how_to_install_it(tmp_path, capsys, monkeypat
     monkeypatch.setitem(sys.modules, "ezdxf", None)
     assert main(["import", str(dxf), "--out", str(tmp_path / "s.json")]) == 2
     assert 'pip install -e ".[dxf]"' in capsys.readouterr().err
+
+
+def _centroid(panel):
+    from tailor.curves import loop_polyline
+
+    p = loop_polyline([e.curve for e in panel.edges])
+    x, y = p[:, 0], p[:, 1]
+    c = x * np.roll(y, -1) - np.roll(x, -1) * y
+    return np.array([((x + np.roll(x, -1)) * c).sum(), ((y + np.roll(y, -1)) * c).sum()]) / (3.0 * c.sum())
+
+
+def _seam_ends(pattern):
+    """Each seam as the two pairs of points sewn together at its ends, in each panel's own frame
+    about its centroid [m]: independent of edge numbering, side direction and panel origin."""
+    from tailor.curves import sample_curve
+
+    def point(side, s):
+        panel = pattern.panels[pattern.panel_index(side.panel)]
+        f = side.start + s * (side.end - side.start)
+        return side.panel, sample_curve(panel.loop(side.hole)[side.edge].curve, [f])[0] - _centroid(panel)
+
+    out = []
+    for seam in pattern.seams:
+        opposite = seam.orientation.removeprefix("auto:") == "opposite"
+        out.append([(point(seam.a, s), point(seam.b, 1 - s if opposite else s)) for s in (0.0, 1.0)])
+    return out
+
+
+def _same_seam(x, y, tol=3e-3) -> bool:
+    """Whether two seams (from :func:`_seam_ends`) sew the same points together, within ``tol`` [m]."""
+    def same_pair(p, q):
+        return any(all(a[0] == b[0] and np.linalg.norm(a[1] - b[1]) < tol for a, b in zip(p, qq)) for qq in (q, q[::-1]))
+    return any(all(same_pair(p, q) for p, q in zip(x, yy)) for yy in (y, y[::-1]))
+
+
+SHIPPED = sorted(p.stem for p in (__import__("pathlib").Path(__file__).parents[1] / "panels").glob("*.json"))
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_pattern_round_trips_through_dxf(tmp_path, name):
+    original = read_pattern(f"panels/{name}.json")
+    dxf, back = tmp_path / f"{name}.dxf", tmp_path / f"{name}.json"
+    assert main(["export-pattern", f"panels/{name}.json", "--out", str(dxf)]) == 0
+    assert main(["import", str(dxf), "--out", str(back)]) == 0
+    again = read_pattern(back)
+    assert [p.name for p in again.panels] == [p.name for p in original.panels]
+    for a, b in zip(original.panels, again.panels):
+        assert b.area == pytest.approx(a.area, rel=0.005), a.name
+    assert len(again.seams) == len(original.seams)
+    found = _seam_ends(again)
+    for seam in _seam_ends(original):  # the same points sewn together
+        assert any(_same_seam(seam, other) for other in found), seam

@@ -1,4 +1,5 @@
-"""``tailor import``: a pattern from pattern-making CAD (DXF in the AAMA / ASTM D6673 layout)."""
+"""``tailor import`` and ``tailor export-pattern``: patterns from and to pattern-making CAD (DXF in
+the AAMA / ASTM D6673 layout)."""
 
 from __future__ import annotations
 
@@ -31,8 +32,21 @@ def _cmd_import(args) -> int:
     return 0
 
 
+def _cmd_export_pattern(args) -> int:
+    from ..io import read_pattern
+    from ..io.dxf_export import write_dxf
+
+    out = Path(args.out)
+    if out.suffix.lower() != ".dxf":
+        raise TailorError(f"--out {out}: a DXF file ends in .dxf")
+    pattern = read_pattern(args.pattern)
+    write_dxf(pattern, out)
+    print(f"{args.pattern}: {len(pattern.panels)} pieces, {len(pattern.seams)} seams as notches -> {out} (AAMA, mm)")
+    return 0
+
+
 def add_import_command(sub) -> None:
-    """import."""
+    """import, export-pattern."""
     i = sub.add_parser("import", help="a pattern from CAD: DXF in the AAMA / ASTM D6673 layout (needs ezdxf)")
     i.add_argument("file", metavar="FILE.dxf")
     i.add_argument("--out", required=True, metavar="PATTERN.json", help="the pattern file to write")
@@ -41,3 +55,9 @@ def add_import_command(sub) -> None:
     i.add_argument("--seams", choices=["auto", "none"], default="auto",
                    help="auto (default): sew notched sides of equal length and matching notches; none: no seams")
     i.set_defaults(func=_cmd_import)
+
+    e = sub.add_parser("export-pattern", help="a pattern to CAD: DXF in the AAMA layout, seams as notches (needs ezdxf)")
+    e.add_argument("pattern", metavar="PATTERN")
+    e.add_argument("--format", choices=["dxf-aama"], default="dxf-aama", help="dxf-aama (the only one)")
+    e.add_argument("--out", required=True, metavar="FILE.dxf")
+    e.set_defaults(func=_cmd_export_pattern)

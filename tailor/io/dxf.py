@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import PatternError
 
-__all__ = ["Piece", "read_dxf", "CORNER_DEG", "UNITS_CM"]
+__all__ = ["Piece", "read_dxf", "quiet_ezdxf", "CORNER_DEG", "UNITS_CM"]
 
 CORNER_DEG = 25.0
 """Without turn points, a boundary vertex where the outline turns more than this is a corner."""
@@ -50,7 +50,8 @@ class Piece:
     """One pattern piece, in centimetres, its outline counter-clockwise.
 
     ``corners`` flags the outline points that are turn points (the rest lie on curves);
-    ``grain`` is the warp's direction [degrees from +x]; ``notches`` are points on the outline.
+    ``grain`` is the warp's direction [degrees from +x]; ``notches`` are points on the outline
+    or a hole; ``holes`` are (points, corners) of the inner boundaries, wound as drawn.
     """
 
     name: str
@@ -61,6 +62,7 @@ class Piece:
     quantity: int = 1
     size: str | None = None
     category: str = ""
+    holes: list = field(default_factory=list)
 
 
 def _fail(path, what: str):
@@ -76,12 +78,17 @@ def _open(path: Path):
         _fail(path, "reading DXF needs ezdxf: pip install -e \".[dxf]\" (or pip install ezdxf)")
     if not path.is_file():
         _fail(path, "no such file")
-    logging.getLogger("ezdxf").setLevel(logging.WARNING)  # its recovery narrates every repair at INFO
+    quiet_ezdxf()
     try:
         doc, _auditor = recover.readfile(str(path))
     except (OSError, ezdxf.DXFStructureError, ValueError, UnicodeDecodeError) as exc:
         _fail(path, f"not a readable DXF file ({str(exc).strip() or type(exc).__name__})")
     return doc
+
+
+def quiet_ezdxf() -> None:
+    """ezdxf narrates every repair and every new document at INFO: warnings only."""
+    logging.getLogger("ezdxf").setLevel(logging.WARNING)
 
 
 def _texts(entities) -> dict:
@@ -129,22 +136,30 @@ def _pieces_entities(doc):
             and any(e.dxf.layer in _BOUNDARY for e in b)]
 
 
-def _outline(entities, path, name):
-    """The boundary's points (K, 2), closed loop without the repeated end."""
+def _loops(entities, path, name):
+    """The boundary's points (K, 2) (closed, without the repeated end) and those of the holes inside it."""
     from ezdxf import path as dxfpath
+    from shapely.geometry import Point, Polygon
 
-    loops = [e for e in entities if e.dxftype() in ("LWPOLYLINE", "POLYLINE") and e.dxf.layer in _BOUNDARY]
-    if not loops:
+    found = [e for e in entities if e.dxftype() in ("LWPOLYLINE", "POLYLINE") and e.dxf.layer in _BOUNDARY]
+    if not found:
         _fail(path, f"piece {name!r}: no boundary on layer 1 (a closed POLYLINE or LWPOLYLINE)")
-    pts = [np.array([(v.x, v.y) for v in dxfpath.make_path(e).flattening(0.1)], float) for e in loops]
-    pts = max(pts, key=lambda p: _area(p) if len(p) >= 3 else 0.0)
+    loops = [_clean(np.array([(v.x, v.y) for v in dxfpath.make_path(e).flattening(0.1)], float)) for e in found]
+    loops = [p for p in loops if len(p) >= 3]
+    if not loops or max(abs(_area(p)) for p in loops) < 1e-12:
+        _fail(path, f"piece {name!r}: the layer 1 boundary encloses no area")
+    loops.sort(key=lambda p: -abs(_area(p)))
+    outer = Polygon(loops[0])
+    holes = [p for p in loops[1:] if abs(_area(p)) > 1e-12 and outer.contains(Point(p.mean(axis=0)))]
+    return loops[0], holes
+
+
+def _clean(pts):
     keep = np.ones(len(pts), bool)
     keep[1:] = np.linalg.norm(np.diff(pts, axis=0), axis=1) > 1e-9
     pts = pts[keep]
     if len(pts) > 1 and np.linalg.norm(pts[0] - pts[-1]) < 1e-9:
         pts = pts[:-1]
-    if len(pts) < 3 or abs(_area(pts)) < 1e-12:
-        _fail(path, f"piece {name!r}: the layer 1 boundary encloses no area")
     return pts
 
 
@@ -201,18 +216,24 @@ def _distance(outline, q) -> float:
 def _piece(name, entities, scale, path) -> Piece:
     texts = _texts(entities)
     label = texts.get("piece name") or name
-    outline = _outline(entities, path, label)
-    if _area(outline) < 0:
-        outline = outline[::-1]
-    corners = _corners(outline, _points(entities, _TURN), _points(entities, _CURVE))
-    if corners.sum() < 2:
-        corners[[0, len(outline) // 2]] = True
+    outline, holes = _loops(entities, path, label)
+    turn, curve = _points(entities, _TURN), _points(entities, _CURVE)
+    loops = []
+    for k, loop in enumerate([outline, *holes]):
+        if k == 0 and _area(loop) < 0:  # the outline counter-clockwise (holes as drawn)
+            loop = np.roll(loop[::-1], 1, axis=0)
+        corners = _corners(loop, turn, curve)
+        if corners.sum() < 2:
+            corners[[0, len(loop) // 2]] = True
+        loops.append((loop, corners))
+    (outline, corners), holes = loops[0], loops[1:]
     try:
         quantity = max(1, int(re.match(r"\s*(\d+)", texts.get("quantity", "1")).group(1)))
     except (AttributeError, ValueError):
         quantity = 1
-    return Piece(label.strip(), outline * scale, corners, _grain(entities),
-                 _notches(entities, outline) * scale, quantity, texts.get("size"), texts.get("category", "").strip())
+    every = np.concatenate([outline, *(h for h, _ in holes)])
+    return Piece(label.strip(), outline * scale, corners, _grain(entities), _notches(entities, every) * scale, quantity,
+                 texts.get("size"), texts.get("category", "").strip(), [(h * scale, c) for h, c in holes])
 
 
 def read_dxf(path, *, units: str | None = None, size: str | None = None):

@@ -1,8 +1,8 @@
 """DXF pieces (:mod:`tailor.io.dxf`) to a tailor pattern: edges, suggested seams, placement.
 
 **Edges.** A piece's outline is cut at its turn points into sides; a side with points between
-its ends becomes one cubic Bézier edge (least squares through them, ends fixed), else a straight
-edge.
+its ends becomes a circular arc if they lie on one, else one cubic Bézier edge (least squares
+through them, ends fixed); a side without is a straight edge.
 
 **Seams** (DXF has none). Notches mark where two pieces are sewn: a side with notches is sewn to
 the side of another piece with the same length (within :data:`SEAM_LENGTH_TOLERANCE`) and its
@@ -12,9 +12,9 @@ pieces named as counterparts (front/back, left/right, a piece and its mirrored c
 Sides without notches (hems, waists, necklines) stay open.
 
 **Placement** from piece names and categories: skirt pieces and gores round the waist, bodice
-fronts and backs round the chest, waistbands above the waist, sleeves round the upper arms, at the
-front (0°) or back (180°), to the body's left (+) or right (−); a skirt with no waistband is held
-at the waist by its top edges.
+fronts and backs round the chest, waistbands above the waist, sleeves round the upper arms (the
+rest round the waist), at the front (0°) or back (180°), to the body's left (+) or right (−); a
+skirt with no waistband is held at the waist by its top edges.
 """
 
 from __future__ import annotations
@@ -34,6 +34,12 @@ SEAM_LENGTH_TOLERANCE = 0.01
 NOTCH_TOLERANCE_CM = 1.0
 """... and their notches lie this close to each other's, measured from the ends that meet."""
 
+EASE = 0.25
+"""A side eased onto a longer one (a sleeve cap) may be this much shorter, its notches then at the
+same fractions of both (within :data:`NOTCH_FRACTION_TOLERANCE`)."""
+
+NOTCH_FRACTION_TOLERANCE = 0.004
+
 STRAIGHT_CM = 0.05
 """A side whose points all lie this close to its chord is a straight edge."""
 
@@ -41,32 +47,42 @@ STRAIGHT_CM = 0.05
 @dataclass
 class _Side:
     piece: int
+    hole: int | None
     index: int
     points: np.ndarray  # (K, 2) from its start corner to its end corner
     length: float
     notches: np.ndarray  # distances of its notches from its start [cm], increasing
 
+    @property
+    def key(self):
+        return self.piece, self.hole, self.index
+
 
 def _mirrored(p: Piece) -> Piece:
     """The other piece of a pair: mirrored across the y axis, still counter-clockwise."""
     flip = np.array([-1.0, 1.0])
-    order = np.roll(np.arange(len(p.outline))[::-1], 1)
-    return Piece(f"{p.name}_2", p.outline[order] * flip, p.corners[order], (180.0 - p.grain) % 180.0,
-                 p.notches * flip, 1, p.size, p.category)
+    def flipped(points, corners):
+        order = np.roll(np.arange(len(points))[::-1], 1)
+        return points[order] * flip, corners[order]
+
+    outline, corners = flipped(p.outline, p.corners)
+    return Piece(f"{p.name}_2", outline, corners, (180.0 - p.grain) % 180.0, p.notches * flip, 1, p.size, p.category,
+                 [flipped(h, c) for h, c in p.holes])
 
 
 def _sides(k: int, p: Piece) -> list:
-    corners = np.flatnonzero(p.corners)
+    """The sides of every loop of piece ``k`` (outline, then holes): runs between turn points."""
     out = []
-    for s, a in enumerate(corners):
-        b = corners[(s + 1) % len(corners)]
-        idx = np.arange(a, b + 1) if b > a else np.concatenate([np.arange(a, len(p.outline)), np.arange(0, b + 1)])
-        pts = p.outline[idx]
-        seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-        along = np.concatenate([[0.0], np.cumsum(seg)])
-        found = [at for d, at in (_project(pts, along, n) for n in p.notches)
-                 if d < 0.3 and 1e-6 < at < along[-1] - 1e-6]  # notches on this side, by distance along it
-        out.append(_Side(k, s, pts, float(along[-1]), np.sort(found)))
+    for hole, (loop, flags) in [(None, (p.outline, p.corners)), *enumerate(p.holes)]:
+        corners = np.flatnonzero(flags)
+        for s, a in enumerate(corners):
+            b = corners[(s + 1) % len(corners)]
+            idx = np.arange(a, b + 1) if b > a else np.concatenate([np.arange(a, len(loop)), np.arange(0, b + 1)])
+            pts = loop[idx]
+            along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+            found = [at for d, at in (_project(pts, along, n) for n in p.notches)
+                     if d < 0.3 and 1e-6 < at < along[-1] - 1e-6]  # notches on this side, by distance along it
+            out.append(_Side(k, hole, s, pts, float(along[-1]), np.sort(found)))
     return out
 
 
@@ -92,6 +108,10 @@ def _edge(points, start: int, end: int) -> dict:
     normal = np.array([-chord[1], chord[0]]) / length
     if np.abs((inner - p0) @ normal).max() < STRAIGHT_CM:
         return edge
+    arc = _circle(points)
+    if arc is not None:
+        edge["curvature"] = {"type": "circle", "params": arc}
+        return edge
     t = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
     t = t / t[-1]
     b = np.column_stack([(1 - t) ** 3, 3 * (1 - t) ** 2 * t, 3 * (1 - t) * t ** 2, t ** 3])
@@ -100,6 +120,22 @@ def _edge(points, start: int, end: int) -> dict:
     rel = [[round(float((c - p0) @ chord / length ** 2), 5), round(float((c - p0) @ normal / length), 5)] for c in ctrl]
     edge["curvature"] = {"type": "cubic", "params": rel}
     return edge
+
+
+def _circle(points):
+    """``[radius, large_arc, sweep]`` (SVG-style, as the pattern format's circle edges) if the points
+    lie on one circular arc within :data:`STRAIGHT_CM`, else None (a least-squares circle fit)."""
+    x, y = points[:, 0], points[:, 1]
+    a = np.column_stack([x, y, np.ones(len(x))])
+    (cx2, cy2, c), *_ = np.linalg.lstsq(a, x * x + y * y, rcond=None)
+    centre = np.array([cx2 / 2, cy2 / 2])
+    radius = float(np.sqrt(max(c + centre @ centre, 0.0)))
+    if len(points) < 4 or radius <= 0 or np.abs(np.linalg.norm(points - centre, axis=1) - radius).max() > STRAIGHT_CM:
+        return None
+    rel = points - centre
+    turn = np.arctan2(rel[:-1, 0] * rel[1:, 1] - rel[:-1, 1] * rel[1:, 0], np.einsum("ij,ij->i", rel[:-1], rel[1:]))
+    swept = float(turn.sum())
+    return [round(radius, 4), int(abs(swept) > np.pi), int(swept > 0)]
 
 
 def _words(piece: Piece) -> set:
@@ -122,25 +158,32 @@ def _counterparts(a: Piece, b: Piece) -> int:
     return 0
 
 
-def _fits(a: _Side, b: _Side) -> bool:
-    if a.piece == b.piece or not len(a.notches) or len(a.notches) != len(b.notches):
-        return False
-    if abs(a.length - b.length) > SEAM_LENGTH_TOLERANCE * max(a.length, b.length):
-        return False
-    # running in opposite directions: a's notch at distance s from its start meets b's at s from b's end
-    return bool(np.all(np.abs(a.notches - (b.length - b.notches[::-1])) <= NOTCH_TOLERANCE_CM))
+def _fits(a: _Side, b: _Side) -> str | None:
+    """How ``a`` and ``b`` are sewn (``opposite``: a's start meets b's end; ``same``), or None.
+
+    Equal lengths and notches at the same distances from the ends that meet; or, for a side eased
+    onto a longer one (up to :data:`EASE`), notches at the same fractions of each side."""
+    if a.key == b.key or not len(a.notches) or len(a.notches) != len(b.notches):
+        return None
+    ratio = min(a.length, b.length) / max(a.length, b.length)
+    for orientation, bn in (("opposite", b.length - b.notches[::-1]), ("same", b.notches)):
+        if ratio >= 1 - SEAM_LENGTH_TOLERANCE and np.all(np.abs(a.notches - bn) <= NOTCH_TOLERANCE_CM):
+            return orientation
+        if ratio >= 1 - EASE and np.all(np.abs(a.notches / a.length - bn / b.length) <= NOTCH_FRACTION_TOLERANCE):
+            return orientation
+    return None
 
 
 def _seams(pieces, sides) -> list:
-    """Pairs of sides to sew, counterparts first, each side used once."""
+    """(side, side, orientation) to sew, counterparts first, each side used once."""
     flat = [s for ss in sides for s in ss]
-    pairs = [(a, b) for i, a in enumerate(flat) for b in flat[i + 1:] if _fits(a, b)]
+    pairs = [(a, b, how) for i, a in enumerate(flat) for b in flat[i + 1:] if (how := _fits(a, b))]
     pairs.sort(key=lambda ab: (-_counterparts(pieces[ab[0].piece], pieces[ab[1].piece]), abs(ab[0].length - ab[1].length)))
     used, out = set(), []
-    for a, b in pairs:
-        if (a.piece, a.index) not in used and (b.piece, b.index) not in used:
-            used |= {(a.piece, a.index), (b.piece, b.index)}
-            out.append((a, b))
+    for a, b, how in pairs:
+        if a.key not in used and b.key not in used:
+            used |= {a.key, b.key}
+            out.append((a, b, how))
     return out
 
 
@@ -161,10 +204,23 @@ def _placement(piece: Piece, corners, has_band: bool):
     if w & {"bodice", "top", "shirt", "blouse", "yoke", "dress"}:
         anchor = [top[0], round(float(lo[1] + 0.7 * (hi[1] - lo[1])), 2)]
         return {"landmark": "chest", "angle": angle, "anchor": anchor, "offset": 0, "clearance": 2}, False
-    return {"landmark": "waist", "angle": angle, "anchor": top, "offset": -1, "clearance": 2}, not has_band
+    return {"landmark": "waist", "angle": angle, "anchor": top, "offset": -1, "clearance": 2}, \
+        bool(w & {"skirt", "gore"}) and not has_band
 
 
-def _top_side(sides, corners_ids) -> int:
+def _loop_dict(corners, sides, origin) -> dict:
+    """``{"vertices", "edges"}`` of one loop, its sides in order."""
+    n = len(corners)
+    return {"vertices": np.round(corners, 3).tolist(),
+            "edges": [_edge(s.points - origin, i, (i + 1) % n) for i, s in enumerate(sides)]}
+
+
+def _side_ref(pieces, side: _Side) -> dict:
+    ref = {"panel": pieces[side.piece].name, "edge": side.index}
+    return {**ref, "hole": side.hole} if side.hole is not None else ref
+
+
+def _top_side(sides) -> int:
     """The side without notches whose middle is highest (a skirt's waist)."""
     free = [s for s in sides if not len(s.notches)] or sides
     return max(free, key=lambda s: s.points[len(s.points) // 2][1]).index
@@ -181,26 +237,27 @@ def pieces_to_pattern(pieces, name: str, *, seams: str = "auto") -> tuple[dict, 
     if len(set(names)) < len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
         expanded = [Piece(f"{p.name}_{i}" if p.name in dup else p.name, p.outline, p.corners, p.grain, p.notches,
-                          1, p.size, p.category) for i, p in enumerate(expanded)]
+                          1, p.size, p.category, p.holes) for i, p in enumerate(expanded)]
     sides = [_sides(k, p) for k, p in enumerate(expanded)]
     has_band = any(_words(p) & {"waistband", "band", "wb"} for p in expanded)
     panels, attachments = {}, []
     for p, ss in zip(expanded, sides):
-        corners = p.outline[p.corners] - p.outline.min(axis=0)
-        ids = np.arange(len(corners))
-        edges = [_edge(s.points - p.outline.min(axis=0), int(i), int((i + 1) % len(corners))) for i, s in zip(ids, ss)]
-        placement, hold = _placement(p, corners, has_band)
-        panels[p.name] = {"vertices": np.round(corners, 3).tolist(), "edges": edges, "grain": round(p.grain, 3),
+        origin = p.outline.min(axis=0)
+        panel = _loop_dict(p.outline[p.corners] - origin, [s for s in ss if s.hole is None], origin)
+        placement, hold = _placement(p, p.outline[p.corners] - origin, has_band)
+        holes = [_loop_dict(h[c] - origin, [s for s in ss if s.hole == k], origin) for k, (h, c) in enumerate(p.holes)]
+        panels[p.name] = {**panel, **({"holes": holes} if holes else {}), "grain": round(p.grain, 3),
                           "label": p.category or "piece", "placement": placement}
         if hold:
-            attachments.append({"panel": p.name, "edge": _top_side(ss, ids), "to": "waist"})
+            attachments.append({"panel": p.name, "edge": _top_side([s for s in ss if s.hole is None]), "to": "waist"})
     stitches = []
     if seams == "auto":
-        for a, b in _seams(expanded, sides):
-            stitches.append({"between": [{"panel": expanded[a.piece].name, "edge": a.index},
-                                         {"panel": expanded[b.piece].name, "edge": b.index}], "orientation": "opposite"})
+        for a, b, how in _seams(expanded, sides):
+            stitches.append({"between": [_side_ref(expanded, a), _side_ref(expanded, b)], "orientation": how})
     notes = [f"{len(expanded)} pieces ({', '.join(p.name for p in expanded)}), {len(stitches)} seams suggested"]
     open_notched = sum(1 for ss in sides for s in ss if len(s.notches)) - 2 * len(stitches)
+    if seams != "auto":
+        open_notched = 0
     if seams == "auto" and open_notched:
         notes.append(f"{open_notched} notched sides found no partner of the same length and notches: left open")
     pattern = {"name": name, "description": f"imported from {name}.dxf", "fabric": "cotton",
