@@ -1,6 +1,7 @@
 """Patterns from CAD: AAMA / ASTM DXF files from several exporters' dialects import with their
 pieces, areas and seams, and drape without hand editing; broken files give one line and exit 2."""
 
+import json
 
 import numpy as np
 import pytest
@@ -173,3 +174,28 @@ def test_every_shipped_pattern_round_trips_through_dxf(tmp_path, name):
     found = _seam_ends(again)
     for seam in _seam_ends(original):  # the same points sewn together
         assert any(_same_seam(seam, other) for other in found), seam
+
+
+def test_a_seams_sidecar_names_sides_by_edge_or_notch_and_overrides_placement(tmp_path, capsys):
+    dxf = write_aama(tmp_path / "skirt.dxf")
+    sidecar = tmp_path / "seams.json"
+    sidecar.write_text(json.dumps({
+        "seams": [{"between": [{"piece": "Front Left", "notch": 1}, {"piece": "Back Left", "edge": 3}]},
+                  {"between": [{"piece": "Front Left", "edge": 3}, {"piece": "Front Right", "notch": 1}]}],
+        "placement": {"Back Left": {"landmark": "hips", "angle": 135}}}))
+    out = tmp_path / "skirt.json"
+    assert main(["import", str(dxf), "--out", str(out), "--seams", str(sidecar)]) == 0
+    pattern = read_pattern(out)
+    assert _sewn(pattern) == {frozenset(("Front Left", "Back Left")), frozenset(("Front Left", "Front Right"))}
+    assert all(s.orientation == "opposite" for s in pattern.seams)  # as their notches say
+    assert pattern.panels[2].placement.landmark == "hips"
+    for bad, words in (({"seams": [{"between": [{"piece": "Nope", "edge": 0}, {"piece": "Back Left", "edge": 3}]}]},
+                        "seams[0].between[0]"),
+                       ({"seams": [{"between": [{"piece": "Front Left", "notch": 9}, {"piece": "Back Left", "edge": 3}]}]},
+                        "seams[0].between[0].notch: piece 'Front Left' has notches 1 to 2"),
+                       ({"placement": {"Nope": {}}}, "placement.Nope: no such piece")):
+        sidecar.write_text(json.dumps(bad))
+        capsys.readouterr()
+        assert main(["import", str(dxf), "--out", str(tmp_path / "bad.json"), "--seams", str(sidecar)]) == 2
+        err = capsys.readouterr().err
+        assert words in err and str(sidecar) in err and len(err.strip().splitlines()) == 1

@@ -19,8 +19,19 @@ def _cmd_import(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() != ".json":
         raise TailorError(f"--out {out}: a pattern file ends in .json")
+    sidecar = None
+    if args.seams not in ("auto", "none"):
+        path = Path(args.seams)
+        try:
+            sidecar = (json.loads(path.read_text()), str(path))
+        except OSError as exc:
+            raise TailorError(f"--seams {path}: cannot read: {exc.strerror or exc}") from None
+        except ValueError as exc:
+            raise TailorError(f"{path}: malformed JSON: {exc}") from None
+        if not isinstance(sidecar[0], dict):
+            raise TailorError(f"{path}: expected an object with 'seams' (and 'placement')")
     pieces, notes = read_dxf(source, units=args.units, size=args.size)
-    doc, more = pieces_to_pattern(pieces, out.stem, seams=args.seams)
+    doc, more = pieces_to_pattern(pieces, out.stem, seams=args.seams, sidecar=sidecar)
     doc["description"] = f"imported from {source.name}"
     pattern = pattern_from_dict(doc, source=str(out))  # what it would read back, checked before writing
     write_text_atomic(out, json.dumps(doc, indent=1))
@@ -52,8 +63,9 @@ def add_import_command(sub) -> None:
     i.add_argument("--out", required=True, metavar="PATTERN.json", help="the pattern file to write")
     i.add_argument("--units", choices=["mm", "cm", "in", "m"], help="the file's units (default: from the file, else mm)")
     i.add_argument("--size", metavar="S", help="the size to read from a graded file (default: the first)")
-    i.add_argument("--seams", choices=["auto", "none"], default="auto",
-                   help="auto (default): sew notched sides of equal length and matching notches; none: no seams")
+    i.add_argument("--seams", default="auto", metavar="auto|none|SEAMS.json",
+                   help="auto (default): sew notched sides of equal length and matching notches; none: no seams; "
+                        "SEAMS.json: the seams (and placements) listed there (docs/pattern-format.md)")
     i.set_defaults(func=_cmd_import)
 
     e = sub.add_parser("export-pattern", help="a pattern to CAD: DXF in the AAMA layout, seams as notches (needs ezdxf)")

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import PatternError
 from .dxf import Piece
 
 __all__ = ["pieces_to_pattern", "SEAM_LENGTH_TOLERANCE", "NOTCH_TOLERANCE_CM"]
@@ -226,8 +227,43 @@ def _top_side(sides) -> int:
     return max(free, key=lambda s: s.points[len(s.points) // 2][1]).index
 
 
-def pieces_to_pattern(pieces, name: str, *, seams: str = "auto") -> tuple[dict, list]:
-    """(pattern dict in tailor's JSON layout, notes) from DXF pieces; ``seams`` ``auto`` or ``none``."""
+def _sidecar_side(ref, where, pieces, sides):
+    """The side a sidecar names: ``{"piece": name, "edge": i}`` (the i-th side of its outline) or
+    ``{"piece": name, "notch": n}`` (the side holding its n-th notch, counted from 1 along the outline)."""
+    names = [p.name for p in pieces]
+    if not isinstance(ref, dict) or ref.get("piece") not in names or ("edge" in ref) == ("notch" in ref):
+        raise PatternError(f"{where}: expected {{\"piece\": one of {names}, \"edge\": i}} or {{..., \"notch\": n}}, got {ref!r}")
+    own = [s for s in sides[names.index(ref["piece"])] if s.hole is None]
+    if "edge" in ref:
+        if not isinstance(ref["edge"], int) or not 0 <= ref["edge"] < len(own):
+            raise PatternError(f"{where}.edge: piece {ref['piece']!r} has sides 0 to {len(own) - 1}, got {ref['edge']!r}")
+        return own[ref["edge"]]
+    notched = [s for s in own for _ in s.notches]
+    n = ref["notch"]
+    if not isinstance(n, int) or not 1 <= n <= len(notched):
+        raise PatternError(f"{where}.notch: piece {ref['piece']!r} has notches 1 to {len(notched)}, got {n!r}")
+    return notched[n - 1]
+
+
+def _sidecar_seams(sidecar, pieces, sides) -> list:
+    """The stitches a sidecar lists (``{"seams": [{"between": [side, side]}, …]}``), oriented by their
+    notches where they agree, else ``auto`` (from the placed panels)."""
+    doc, source = sidecar
+    out = []
+    for k, seam in enumerate(doc.get("seams", [])):
+        where = f"{source}: seams[{k}]"
+        if not isinstance(seam, dict) or not isinstance(seam.get("between"), list) or len(seam["between"]) != 2:
+            raise PatternError(f"{where}: expected {{\"between\": [side, side]}}")
+        a, b = (_sidecar_side(r, f"{where}.between[{i}]", pieces, sides) for i, r in enumerate(seam["between"]))
+        out.append({"between": [_side_ref(pieces, a), _side_ref(pieces, b)], "orientation": _fits(a, b) or "auto"})
+    return out
+
+
+def pieces_to_pattern(pieces, name: str, *, seams: str = "auto", sidecar=None) -> tuple[dict, list]:
+    """(pattern dict in tailor's JSON layout, notes) from DXF pieces; ``seams`` ``auto`` or ``none``.
+
+    ``sidecar``: (parsed SEAMS.json, its file name) whose ``seams`` replace the suggested ones and
+    whose ``placement`` (piece name → a placement object) overrides the guessed placements."""
     expanded = []
     for p in pieces:
         expanded.append(p)
@@ -251,10 +287,18 @@ def pieces_to_pattern(pieces, name: str, *, seams: str = "auto") -> tuple[dict, 
         if hold:
             attachments.append({"panel": p.name, "edge": _top_side([s for s in ss if s.hole is None]), "to": "waist"})
     stitches = []
-    if seams == "auto":
+    if sidecar is not None:
+        stitches = _sidecar_seams(sidecar, expanded, sides)
+        for piece, placement in sidecar[0].get("placement", {}).items():
+            if piece not in panels:
+                raise PatternError(f"{sidecar[1]}: placement.{piece}: no such piece (pieces: {', '.join(panels)})")
+            panels[piece]["placement"] = placement
+        seams = "sidecar"
+    elif seams == "auto":
         for a, b, how in _seams(expanded, sides):
             stitches.append({"between": [_side_ref(expanded, a), _side_ref(expanded, b)], "orientation": how})
-    notes = [f"{len(expanded)} pieces ({', '.join(p.name for p in expanded)}), {len(stitches)} seams suggested"]
+    notes = [f"{len(expanded)} pieces ({', '.join(p.name for p in expanded)}), {len(stitches)} seams "
+             + ("from the sidecar" if seams == "sidecar" else "suggested")]
     open_notched = sum(1 for ss in sides for s in ss if len(s.notches)) - 2 * len(stitches)
     if seams != "auto":
         open_notched = 0
