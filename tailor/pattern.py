@@ -139,6 +139,9 @@ class Panel:
     fabric : Fabric or None
         Per-panel fabric; ``None`` = the pattern's.
     label : str
+    marks : tuple of (kind, points)
+        Pattern-maker's marks the simulation does not use, kept from CAD and drawn: ``notch`` and
+        ``drill_hole`` (points), ``internal_line`` and ``mirror_line`` (two points each) [m].
     """
 
     name: str
@@ -149,6 +152,7 @@ class Panel:
     placement: TransformPlacement | LandmarkPlacement | None = None
     fabric: Fabric | None = None
     label: str = ""
+    marks: tuple = ()
 
     def loop(self, hole: int | None = None) -> tuple[Edge, ...]:
         """The outline (``hole=None``) or hole number ``hole``."""

@@ -199,3 +199,22 @@ def test_a_seams_sidecar_names_sides_by_edge_or_notch_and_overrides_placement(tm
         assert main(["import", str(dxf), "--out", str(tmp_path / "bad.json"), "--seams", str(sidecar)]) == 2
         err = capsys.readouterr().err
         assert words in err and str(sidecar) in err and len(err.strip().splitlines()) == 1
+
+
+def test_notches_drill_holes_and_lines_are_kept_as_panel_marks(tmp_path):
+    pattern = _import(tmp_path)
+    kinds = [k for k, _ in pattern.panels[0].marks]
+    assert kinds.count("notch") == 2 and kinds.count("drill_hole") == 1
+    hole = np.asarray(dict(pattern.panels[0].marks)["drill_hole"][0]) - _centroid(pattern.panels[0])
+    # (0, 30 cm) of the gore's own frame, whose centroid lies on x = 0
+    assert hole[0] == pytest.approx(0.0, abs=1e-3)
+    again = tmp_path / "again.dxf"
+    assert main(["export-pattern", str(tmp_path / "skirt.json"), "--out", str(again)]) == 0
+    assert main(["import", str(again), "--out", str(tmp_path / "again.json")]) == 0
+    back = read_pattern(tmp_path / "again.json").panels[0]
+    moved = np.asarray(dict(back.marks)["drill_hole"][0]) - _centroid(back)
+    assert np.linalg.norm(moved - hole) < 1e-3
+    from tailor.io.draw import draw_pattern
+
+    draw_pattern(read_pattern(tmp_path / "again.json"), tmp_path / "marks.png")
+    assert (tmp_path / "marks.png").stat().st_size > 1000

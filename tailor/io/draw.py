@@ -134,6 +134,21 @@ def _draw_panel(ax, i, panel, off, mesh, size) -> None:
                                  linewidth=0.8))
     ax.text(centre[0], centre[1] - min(ext) * 0.05, panel.name, fontsize=8, ha="center", va="top",
             rotation=0, bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.7, "pad": 1})
+    _draw_marks(ax, panel, off)
+
+
+MARK_STYLES = {"notch": {"marker": "^", "markersize": 4, "linestyle": "none", "color": "black"},
+               "drill_hole": {"marker": "o", "markersize": 5, "linestyle": "none", "markerfacecolor": "none",
+                              "color": "black"},
+               "internal_line": {"linestyle": "--", "linewidth": 0.7, "color": "0.3"},
+               "mirror_line": {"linestyle": "-.", "linewidth": 0.7, "color": "0.3"}}
+"""How a panel's marks from CAD are drawn."""
+
+
+def _draw_marks(ax, panel, off) -> None:
+    for kind, pts in panel.marks:
+        p = (np.asarray(pts) + off) * CM
+        ax.plot(p[:, 0], p[:, 1], **MARK_STYLES[kind])
 
 
 def _draw_seams(ax, pattern, offsets, size, cmap) -> None:

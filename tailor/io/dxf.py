@@ -9,8 +9,9 @@ and a ``Units: METRIC|ENGLISH`` text (or the header's ``$INSUNITS``); layers by 
 2, 3  turn and curve points        POINTs on the boundary: corners, and points of curves
 4     notches                      short LINEs (the end on the boundary) or POINTs
 7     grain line                   a LINE: the warp direction
-6, 8  mirror and internal lines    kept out of the way (listed as ignored)
-13    drill holes                  listed as ignored
+6, 8  mirror and internal lines    LINEs, kept as panel marks (85: ASTM internal)
+13    drill holes                  CIRCLEs or POINTs, kept as panel marks (5 grade reference and
+                                   14 sew lines are listed as ignored)
 ====  ==========================  ===========================================================
 
 Exporters bend these rules; the reader is lenient and says what it ignored. Without turn
@@ -41,8 +42,7 @@ UNITS_CM = {"mm": 0.1, "cm": 1.0, "in": 2.54, "m": 100.0}
 
 _INSUNITS = {1: "in", 4: "mm", 5: "cm", 6: "m"}
 _BOUNDARY, _TURN, _CURVE, _NOTCH, _GRAIN = ("1", "84"), "2", "3", "4", "7"
-_IGNORED = {"6": "mirror line", "8": "internal line", "85": "internal line", "13": "drill hole", "14": "sew line",
-            "5": "grade reference"}
+_IGNORED = {"14": "sew line", "5": "grade reference"}
 
 
 @dataclass
@@ -63,6 +63,7 @@ class Piece:
     size: str | None = None
     category: str = ""
     holes: list = field(default_factory=list)
+    marks: list = field(default_factory=list)  # (kind, points (k, 2) [cm]) kept from the file
 
 
 def _fail(path, what: str):
@@ -232,8 +233,26 @@ def _piece(name, entities, scale, path) -> Piece:
     except (AttributeError, ValueError):
         quantity = 1
     every = np.concatenate([outline, *(h for h, _ in holes)])
-    return Piece(label.strip(), outline * scale, corners, _grain(entities), _notches(entities, every) * scale, quantity,
-                 texts.get("size"), texts.get("category", "").strip(), [(h * scale, c) for h, c in holes])
+    notches = _notches(entities, every) * scale
+    marks = [("notch", n[None]) for n in notches] + [(kind, pts * scale) for kind, pts in _marks(entities)]
+    return Piece(label.strip(), outline * scale, corners, _grain(entities), notches, quantity, texts.get("size"),
+                 texts.get("category", "").strip(), [(h * scale, c) for h, c in holes], marks)
+
+
+_MARKS = {"13": "drill_hole", "8": "internal_line", "85": "internal_line", "6": "mirror_line"}
+
+
+def _marks(entities) -> list:
+    """(kind, points) of the drill holes (a CIRCLE's centre or a POINT) and internal and mirror LINEs."""
+    out = []
+    for e in entities:
+        kind = _MARKS.get(e.dxf.layer)
+        if kind == "drill_hole" and e.dxftype() in ("CIRCLE", "POINT"):
+            c = e.dxf.center if e.dxftype() == "CIRCLE" else e.dxf.location
+            out.append((kind, np.array([[c.x, c.y]])))
+        elif kind in ("internal_line", "mirror_line") and e.dxftype() == "LINE":
+            out.append((kind, np.array([[e.dxf.start.x, e.dxf.start.y], [e.dxf.end.x, e.dxf.end.y]])))
+    return out
 
 
 def read_dxf(path, *, units: str | None = None, size: str | None = None):
@@ -253,6 +272,9 @@ def read_dxf(path, *, units: str | None = None, size: str | None = None):
     notes: list = []
     scale = _units(doc, [e for _, ents in blocks for e in ents] + list(doc.modelspace()), units, path, notes)
     pieces = [_piece(name, ents, scale, path) for name, ents in blocks]
+    unnamed = [name for name, ents in blocks if "piece name" not in _texts(ents)]
+    if unnamed:
+        notes.append(f"no 'Piece Name:' text: named after their blocks: {', '.join(unnamed)}")
     ignored = sorted({f"{_IGNORED[e.dxf.layer]} (layer {e.dxf.layer})" for _, ents in blocks for e in ents
                       if e.dxf.layer in _IGNORED})
     if ignored:

@@ -8,7 +8,8 @@ turn points (layer 2) and the samples of curved edges as curve points (layer 3),
 that say which sides are sewn together, as CAD does: seam k puts 1 + k mod 4 notches on both of
 its sides, at fractions (j + 1) / (n + 1) + 0.03·(1 + k div 4) of each side, measured from the
 ends that meet; :mod:`tailor.io.dxf_pattern` pairs sides by them. A seam on part of an edge gets
-turn points where it starts and ends: in the DXF that stretch is a side of its own.
+turn points where it starts and ends: in the DXF that stretch is a side of its own. The panel's
+marks go with it (drill holes, internal and mirror lines; not its notches: the seam codes are).
 """
 
 from __future__ import annotations
@@ -70,6 +71,18 @@ def _loop(block, edges, key, marks, mm):
     block.add_lwpolyline([tuple(p) for p in np.concatenate(pts) * mm], close=True, dxfattribs={"layer": "1"})
 
 
+def _write_marks(block, marks, mm) -> None:
+    """A panel's drill holes (layer 13), internal (8) and mirror lines (6). Its notches are not
+    written: the seams' notch codes are, and another notch on a seam's side would hide its code."""
+    layers = {"drill_hole": "13", "internal_line": "8", "mirror_line": "6"}
+    for kind, pts in marks:
+        p = np.asarray(pts) * mm
+        if kind == "drill_hole":
+            block.add_circle(tuple(p[0]), 2.0, dxfattribs={"layer": layers[kind]})
+        elif kind in layers:
+            block.add_line(tuple(p[0]), tuple(p[1]), dxfattribs={"layer": layers[kind]})
+
+
 def write_dxf(pattern, path) -> None:
     """Write ``pattern`` as an AAMA DXF at ``path`` (atomically)."""
     try:
@@ -94,6 +107,7 @@ def write_dxf(pattern, path) -> None:
         centre, reach = 0.5 * (lo + hi), 0.25 * float((hi - lo).min())
         d = np.array([np.cos(panel.grain), np.sin(panel.grain)]) * reach
         block.add_line(tuple(centre - d), tuple(centre + d), dxfattribs={"layer": "7"})
+        _write_marks(block, panel.marks, mm)
         for text in (f"Piece Name: {panel.name}", "Quantity: 1", f"Category: {panel.label or 'piece'}"):
             block.add_text(text, dxfattribs={"layer": "15"})
         msp.add_blockref(f"PIECE{k}", (x - lo[0], -lo[1]))

@@ -14,7 +14,7 @@ Sides without notches (hems, waists, necklines) stay open.
 **Placement** from piece names and categories: skirt pieces and gores round the waist, bodice
 fronts and backs round the chest, waistbands above the waist, sleeves round the upper arms (the
 rest round the waist), at the front (0°) or back (180°), to the body's left (+) or right (−); a
-skirt with no waistband is held at the waist by its top edges.
+skirt alone (no waistband, no bodice) is held at the waist by its top edges.
 """
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ def _mirrored(p: Piece) -> Piece:
 
     outline, corners = flipped(p.outline, p.corners)
     return Piece(f"{p.name}_2", outline, corners, (180.0 - p.grain) % 180.0, p.notches * flip, 1, p.size, p.category,
-                 [flipped(h, c) for h, c in p.holes])
+                 [flipped(h, c) for h, c in p.holes], [(kind, pts * flip) for kind, pts in p.marks])
 
 
 def _sides(k: int, p: Piece) -> list:
@@ -188,7 +188,7 @@ def _seams(pieces, sides) -> list:
     return out
 
 
-def _placement(piece: Piece, corners, has_band: bool):
+def _placement(piece: Piece, corners, skirt_only: bool):
     """(placement dict, hold the top at the waist) from the piece's name and category."""
     w = _words(piece)
     lo, hi = corners.min(axis=0), corners.max(axis=0)
@@ -206,7 +206,7 @@ def _placement(piece: Piece, corners, has_band: bool):
         anchor = [top[0], round(float(lo[1] + 0.7 * (hi[1] - lo[1])), 2)]
         return {"landmark": "chest", "angle": angle, "anchor": anchor, "offset": 0, "clearance": 2}, False
     return {"landmark": "waist", "angle": angle, "anchor": top, "offset": -1, "clearance": 2}, \
-        bool(w & {"skirt", "gore"}) and not has_band
+        bool(w & {"skirt", "gore"}) and skirt_only
 
 
 def _loop_dict(corners, sides, origin) -> dict:
@@ -214,6 +214,17 @@ def _loop_dict(corners, sides, origin) -> dict:
     n = len(corners)
     return {"vertices": np.round(corners, 3).tolist(),
             "edges": [_edge(s.points - origin, i, (i + 1) % n) for i, s in enumerate(sides)]}
+
+
+def _marks_dict(marks, origin) -> dict:
+    """``{"marks": {"notches": [...], ...}}`` in panel coordinates (empty if none)."""
+    keys = {"notch": "notches", "drill_hole": "drill_holes", "internal_line": "internal_lines",
+            "mirror_line": "mirror_lines"}
+    out: dict = {}
+    for kind, pts in marks:
+        rel = np.round(np.asarray(pts) - origin, 3).tolist()
+        out.setdefault(keys[kind], []).append(rel[0] if len(rel) == 1 else rel)
+    return {"marks": out} if out else {}
 
 
 def _side_ref(pieces, side: _Side) -> dict:
@@ -273,17 +284,18 @@ def pieces_to_pattern(pieces, name: str, *, seams: str = "auto", sidecar=None) -
     if len(set(names)) < len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
         expanded = [Piece(f"{p.name}_{i}" if p.name in dup else p.name, p.outline, p.corners, p.grain, p.notches,
-                          1, p.size, p.category, p.holes) for i, p in enumerate(expanded)]
+                          1, p.size, p.category, p.holes, p.marks) for i, p in enumerate(expanded)]
     sides = [_sides(k, p) for k, p in enumerate(expanded)]
-    has_band = any(_words(p) & {"waistband", "band", "wb"} for p in expanded)
+    # a skirt alone (no waistband, no bodice to hang from) is held at the waist by its top edges
+    skirt_only = all(_words(p) & {"skirt", "gore"} for p in expanded)
     panels, attachments = {}, []
     for p, ss in zip(expanded, sides):
         origin = p.outline.min(axis=0)
         panel = _loop_dict(p.outline[p.corners] - origin, [s for s in ss if s.hole is None], origin)
-        placement, hold = _placement(p, p.outline[p.corners] - origin, has_band)
+        placement, hold = _placement(p, p.outline[p.corners] - origin, skirt_only)
         holes = [_loop_dict(h[c] - origin, [s for s in ss if s.hole == k], origin) for k, (h, c) in enumerate(p.holes)]
         panels[p.name] = {**panel, **({"holes": holes} if holes else {}), "grain": round(p.grain, 3),
-                          "label": p.category or "piece", "placement": placement}
+                          "label": p.category or "piece", "placement": placement, **_marks_dict(p.marks, origin)}
         if hold:
             attachments.append({"panel": p.name, "edge": _top_side([s for s in ss if s.hole is None]), "to": "waist"})
     stitches = []

@@ -51,7 +51,7 @@ GARMENTCODE_TO_TAILOR = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 
 _TOP = {"pattern", "properties", "parameters", "parameter_order", "fabric", "name", "description"}
 _PATTERN = {"panels", "stitches", "panel_order", "attachments"}
 _PROPERTIES = {"units_in_meter", "curvature_coords", "normalize_panel_translation", "normalized_edge_loops"}
-_PANEL = {"vertices", "edges", "translation", "rotation", "label", "holes", "grain", "fabric", "placement"}
+_PANEL = {"vertices", "edges", "translation", "rotation", "label", "holes", "grain", "fabric", "placement", "marks"}
 _HOLE = {"vertices", "edges"}
 _EDGE = {"endpoints", "curvature", "label"}
 _CURVATURE = {"type", "params"}
@@ -209,7 +209,30 @@ def _panel(name: str, node: Node, scale: float, relative: bool) -> Panel:
         placement = _transform(node, scale)
     fabric = _fabric(node.key("fabric")) if node.has("fabric") else None
     label = node.key("label", "").as_str()
-    return Panel(name, vertices, edges, holes, grain, placement, fabric, label)
+    marks = _marks(node.key("marks"), scale) if node.has("marks") else ()
+    return Panel(name, vertices, edges, holes, grain, placement, fabric, label, marks)
+
+
+MARK_KINDS = {"notches": ("notch", 1), "drill_holes": ("drill_hole", 1), "internal_lines": ("internal_line", 2),
+              "mirror_lines": ("mirror_line", 2)}
+"""A panel's ``marks``: file key → (kind, points per mark)."""
+
+
+def _marks(node: Node, scale: float) -> tuple:
+    """((kind, points [m]), …) of a panel's ``marks``: points, or lines as two points each."""
+    node.as_object(set(MARK_KINDS))
+    out = []
+    for key, child in node.entries():
+        kind, per = MARK_KINDS[key]
+        child.as_list()
+        for item in child.items():
+            if per == 1:
+                x, y = item.as_point(2)
+                out.append((kind, ((x * scale, y * scale),)))
+            else:
+                item.as_list(length=2)
+                out.append((kind, tuple((x * scale, y * scale) for x, y in (q.as_point(2) for q in item.items()))))
+    return tuple(out)
 
 
 def _loop(node: Node, scale: float, relative: bool, keys=None):
