@@ -64,6 +64,7 @@ class Piece:
     category: str = ""
     holes: list = field(default_factory=list)
     marks: list = field(default_factory=list)  # (kind, points (k, 2) [cm]) kept from the file
+    placement: dict | None = None  # tailor's own placement, when the file was written by tailor
 
 
 def _fail(path, what: str):
@@ -236,7 +237,20 @@ def _piece(name, entities, scale, path) -> Piece:
     notches = _notches(entities, every) * scale
     marks = [("notch", n[None]) for n in notches] + [(kind, pts * scale) for kind, pts in _marks(entities)]
     return Piece(label.strip(), outline * scale, corners, _grain(entities), notches, quantity, texts.get("size"),
-                 texts.get("category", "").strip(), [(h * scale, c) for h, c in holes], marks)
+                 texts.get("category", "").strip(), [(h * scale, c) for h, c in holes], marks,
+                 _tailor_placement(texts.get("tailor placement")))
+
+
+def _tailor_placement(text):
+    """The placement a ``Tailor Placement: {json}`` text carries (anchor in cm from the outline's
+    lowest corner of its bounding box, as :mod:`tailor.io.dxf_export` writes it), or None."""
+    import json
+
+    try:
+        value = json.loads(text) if text else None
+    except ValueError:
+        return None
+    return value if isinstance(value, dict) and "landmark" in value else None
 
 
 _MARKS = {"13": "drill_hole", "8": "internal_line", "85": "internal_line", "6": "mirror_line"}

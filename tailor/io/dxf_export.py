@@ -7,7 +7,7 @@ turn points (layer 2) and the samples of curved edges as curve points (layer 3),
 (layer 7), ``Piece Name:``, ``Quantity: 1`` and ``Category:`` texts, and **notches** (layer 4)
 that say which sides are sewn together, as CAD does: seam k puts 1 + k mod 4 notches on both of
 its sides, at fractions (j + 1) / (n + 1) + 0.03·(1 + k div 4) of each side, measured from the
-ends that meet; :mod:`tailor.io.dxf_pattern` pairs sides by them. A seam on part of an edge gets
+ends that meet (a seam's sides run so that the points at equal fractions meet); :mod:`tailor.io.dxf_pattern` pairs sides by them. A seam on part of an edge gets
 turn points where it starts and ends: in the DXF that stretch is a side of its own. The panel's
 marks go with it (drill holes, internal and mirror lines; not its notches: the seam codes are).
 """
@@ -39,11 +39,10 @@ def _marks(pattern):
     and ends (a turn point there makes that stretch a side of its own in the DXF)."""
     notches, turns = {}, {}
     for k, seam in enumerate(pattern.seams):
-        f = seam_notch_fractions(k)
-        opposite = seam.orientation.removeprefix("auto:") == "opposite"
-        for side, s in ((seam.a, f), (seam.b, 1.0 - f if opposite else f)):
+        f = seam_notch_fractions(k)  # the point at f along side a meets the point at f along side b
+        for side in (seam.a, seam.b):
             key = (side.panel, side.hole, side.edge)
-            notches.setdefault(key, []).extend(side.start + s * (side.end - side.start))
+            notches.setdefault(key, []).extend(side.start + f * (side.end - side.start))
             turns.setdefault(key, set()).update(t for t in (side.lo, side.hi) if 1e-9 < t < 1 - 1e-9)
     return notches, turns
 
@@ -69,6 +68,25 @@ def _loop(block, edges, key, marks, mm):
         for f in notches.get((*key, i), ()):
             block.add_point(tuple(sample_curve(e.curve, [f])[0] * mm), dxfattribs={"layer": "4"})
     block.add_lwpolyline([tuple(p) for p in np.concatenate(pts) * mm], close=True, dxfattribs={"layer": "1"})
+    return np.concatenate(pts).min(axis=0)
+
+
+def _placement_text(panel, origin) -> list:
+    """``Tailor Placement: {json}`` of a body-relative placement (anchor in cm from ``origin``, the
+    low corner of the written outline's bounding box, where the importer puts the panel's origin):
+    other readers ignore it, tailor's import places the panel as it was."""
+    import json
+    import math
+
+    from ..pattern import LandmarkPlacement
+
+    pl = panel.placement
+    if not isinstance(pl, LandmarkPlacement):
+        return []
+    anchor = None if pl.anchor is None else [round((a - o) * 100, 4) for a, o in zip(pl.anchor, origin)]
+    value = {"landmark": pl.landmark, "angle": round(math.degrees(pl.angle), 6), "offset": round(pl.offset * 100, 4),
+             "clearance": round(pl.clearance * 100, 4), **({"anchor": anchor} if anchor is not None else {})}
+    return [f"Tailor Placement: {json.dumps(value)}"]
 
 
 def _write_marks(block, marks, mm) -> None:
@@ -99,7 +117,7 @@ def write_dxf(pattern, path) -> None:
     x = 0.0
     for k, panel in enumerate(pattern.panels):
         block = doc.blocks.new(f"PIECE{k}")
-        _loop(block, panel.edges, (panel.name, None), marks, mm)
+        outline_min = _loop(block, panel.edges, (panel.name, None), marks, mm)
         for h, hole in enumerate(panel.holes):
             _loop(block, hole, (panel.name, h), marks, mm)
         v = np.asarray(panel.vertices) * mm
@@ -108,7 +126,8 @@ def write_dxf(pattern, path) -> None:
         d = np.array([np.cos(panel.grain), np.sin(panel.grain)]) * reach
         block.add_line(tuple(centre - d), tuple(centre + d), dxfattribs={"layer": "7"})
         _write_marks(block, panel.marks, mm)
-        for text in (f"Piece Name: {panel.name}", "Quantity: 1", f"Category: {panel.label or 'piece'}"):
+        for text in (f"Piece Name: {panel.name}", "Quantity: 1", f"Category: {panel.label or 'piece'}",
+                     *_placement_text(panel, outline_min)):
             block.add_text(text, dxfattribs={"layer": "15"})
         msp.add_blockref(f"PIECE{k}", (x - lo[0], -lo[1]))
         x += float(hi[0] - lo[0]) + 50.0

@@ -11,10 +11,11 @@ the two running in opposite directions as two outlines wound alike do. Where sev
 pieces named as counterparts (front/back, left/right, a piece and its mirrored copy) go first.
 Sides without notches (hems, waists, necklines) stay open.
 
-**Placement** from piece names and categories: skirt pieces and gores round the waist, bodice
-fronts and backs round the chest, waistbands above the waist, sleeves round the upper arms (the
-rest round the waist), at the front (0°) or back (180°), to the body's left (+) or right (−); a
-skirt alone (no waistband, no bodice) is held at the waist by its top edges.
+**Placement** from piece names and categories (:data:`PLACEMENTS`): waistbands above the waist,
+collars round the neck, cuffs round the wrists, sleeves round the upper arms, trouser legs round
+the thighs, bodices round the chest, skirt pieces, gores and the rest round the waist; at the front
+(0°) or back (180°), to the body's left (+) or right (−). Waistbands, and the pieces of a skirt
+alone (no waistband, no bodice), are held at the waist by their top edges.
 """
 
 from __future__ import annotations
@@ -188,6 +189,32 @@ def _seams(pieces, sides) -> list:
     return out
 
 
+PLACEMENTS = (
+    # (words, landmark, limb (left_/right_ by the name), angle: "around" the body or "side" of a limb,
+    #  anchor height as a fraction of the piece from its bottom ("widest": its widest row, a trouser
+    #  leg's crotch), offset [cm], clearance [cm])
+    ({"waistband", "band", "wb"}, "waist", False, "around", 1.0, 2.5, 1),
+    ({"collar"}, "neck", False, "around", 1.0, 2.0, 1),
+    ({"cuff"}, "wrist", True, "side", 1.0, 0.0, 1),
+    ({"sleeve"}, "upper_arm", True, "side", 0.6, 8.0, 2),
+    ({"skirt", "gore"}, "waist", False, "around", 1.0, -1.0, 2),
+    ({"leg", "trouser", "trousers", "pant", "pants"}, "thigh", True, "front", "widest", 0.0, 2),
+    ({"bodice", "top", "shirt", "blouse", "yoke", "dress", "torso", "body"}, "chest", False, "around", 0.7, 0.0, 2),
+)
+"""Where pieces go by the words of their name and category (the first rule that matches; none:
+round the waist, top at the waist): body-relative placements of the pattern format."""
+
+
+def _widest_row(corners) -> float:
+    """Height of the outline's widest horizontal row through one of its corners."""
+    from shapely.geometry import LineString, Polygon
+
+    poly = Polygon(corners)
+    lo, hi = corners[:, 0].min() - 1.0, corners[:, 0].max() + 1.0
+    width = [(poly.intersection(LineString([(lo, y), (hi, y)])).length, y) for y in np.unique(corners[:, 1])]
+    return float(max(width)[1])
+
+
 def _placement(piece: Piece, corners, skirt_only: bool):
     """(placement dict, hold the top at the waist) from the piece's name and category."""
     w = _words(piece)
@@ -195,18 +222,18 @@ def _placement(piece: Piece, corners, skirt_only: bool):
     side = 1.0 if "left" in w else -1.0 if "right" in w else 0.0
     base = 180.0 if "back" in w else 0.0
     turn = 45.0 if ("front" in w or "back" in w) else 90.0
-    angle = base + (side * turn if base == 0.0 else -side * turn)
-    top = [round(float(0.5 * (lo[0] + hi[0])), 2), round(float(hi[1]), 2)]
-    if w & {"waistband", "band", "wb"}:
-        return {"landmark": "waist", "angle": angle, "anchor": top, "offset": 2.5, "clearance": 1}, False
-    if w & {"sleeve"}:
-        limb = "right_upper_arm" if "right" in w else "left_upper_arm"
-        return {"landmark": limb, "angle": base, "anchor": top, "offset": 5, "clearance": 2}, False
-    if w & {"bodice", "top", "shirt", "blouse", "yoke", "dress"}:
-        anchor = [top[0], round(float(lo[1] + 0.7 * (hi[1] - lo[1])), 2)]
-        return {"landmark": "chest", "angle": angle, "anchor": anchor, "offset": 0, "clearance": 2}, False
-    return {"landmark": "waist", "angle": angle, "anchor": top, "offset": -1, "clearance": 2}, \
-        bool(w & {"skirt", "gore"}) and skirt_only
+    around = base + (side * turn if base == 0.0 else -side * turn)
+    centre = round(float(0.5 * (lo[0] + hi[0])), 2)
+    for words, landmark, limb, how, height, offset, clearance in PLACEMENTS:
+        if w & words:
+            name = (("right_" if "right" in w else "left_") + landmark) if limb else landmark
+            angle = {"around": around, "front": base, "side": 90.0 * (side or 1.0)}[how]
+            y = _widest_row(corners) if height == "widest" else float(lo[1] + height * (hi[1] - lo[1]))
+            hold = (landmark == "waist") and (bool(w & {"waistband", "band", "wb"}) or skirt_only)
+            return {"landmark": name, "angle": angle, "anchor": [centre, round(y, 2)], "offset": offset,
+                    "clearance": clearance}, hold
+    top = [centre, round(float(hi[1]), 2)]
+    return {"landmark": "waist", "angle": around, "anchor": top, "offset": -1, "clearance": 2}, False
 
 
 def _loop_dict(corners, sides, origin) -> dict:
@@ -284,15 +311,16 @@ def pieces_to_pattern(pieces, name: str, *, seams: str = "auto", sidecar=None) -
     if len(set(names)) < len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
         expanded = [Piece(f"{p.name}_{i}" if p.name in dup else p.name, p.outline, p.corners, p.grain, p.notches,
-                          1, p.size, p.category, p.holes, p.marks) for i, p in enumerate(expanded)]
+                          1, p.size, p.category, p.holes, p.marks, p.placement) for i, p in enumerate(expanded)]
     sides = [_sides(k, p) for k, p in enumerate(expanded)]
-    # a skirt alone (no waistband, no bodice to hang from) is held at the waist by its top edges
+    # held at the waist by their top edges: waistbands, or the skirt pieces of a skirt alone
     skirt_only = all(_words(p) & {"skirt", "gore"} for p in expanded)
     panels, attachments = {}, []
     for p, ss in zip(expanded, sides):
         origin = p.outline.min(axis=0)
         panel = _loop_dict(p.outline[p.corners] - origin, [s for s in ss if s.hole is None], origin)
         placement, hold = _placement(p, p.outline[p.corners] - origin, skirt_only)
+        placement = p.placement or placement  # written by tailor: its own
         holes = [_loop_dict(h[c] - origin, [s for s in ss if s.hole == k], origin) for k, (h, c) in enumerate(p.holes)]
         panels[p.name] = {**panel, **({"holes": holes} if holes else {}), "grain": round(p.grain, 3),
                           "label": p.category or "piece", "placement": placement, **_marks_dict(p.marks, origin)}
