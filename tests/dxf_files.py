@@ -28,7 +28,7 @@ FOUR_GORES = {"Front Left": ([20.0], [35.0]), "Front Right": ([35.0], [20.0]),
 
 
 def write_aama(path, pieces=FOUR_GORES, *, scale=10.0, units_text="METRIC", lwpolyline=True, notch_points=False,
-               quantity=None, sizes=(None,), insunits=None, turn_points=True):
+               quantity=None, sizes=(None,), insunits=None, turn_points=True, mirror_text=None):
     """Write a skirt of gores as an AAMA DXF: one block per piece (and size), inserted in model space.
     ``scale`` file units per cm (10: millimetres)."""
     import ezdxf
@@ -66,6 +66,8 @@ def write_aama(path, pieces=FOUR_GORES, *, scale=10.0, units_text="METRIC", lwpo
             block.add_circle((0, 30 * scale), 0.2 * scale, dxfattribs={"layer": "13"})
             block.add_text(f"Piece Name: {name}", dxfattribs={"layer": "15"})
             block.add_text(f"Quantity: {quantity or 1}", dxfattribs={"layer": "15"})
+            if mirror_text:
+                block.add_text(f"Mirror: {mirror_text}", dxfattribs={"layer": "15"})
             block.add_text("Category: Skirt", dxfattribs={"layer": "15"})
             if size:
                 block.add_text(f"Size: {size}", dxfattribs={"layer": "15"})

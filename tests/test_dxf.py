@@ -73,6 +73,14 @@ def test_a_pair_becomes_two_mirrored_panels(tmp_path):
     assert len(pattern.seams) == 4  # each front to a back at the side, each piece to its copy at the centre
 
 
+def test_a_pair_the_file_says_is_not_mirrored_stays_alike(tmp_path):
+    pattern = _import(tmp_path, pieces={"Front": ([20.0], [35.0]), "Back": ([35.0], [20.0, 21.0])}, quantity=2,
+                      mirror_text="N")
+    a, b = pattern.panels[0], pattern.panels[1]
+    np.testing.assert_allclose(np.asarray(b.vertices) - np.min(b.vertices, axis=0),
+                               np.asarray(a.vertices) - np.min(a.vertices, axis=0), atol=1e-9)
+
+
 def test_a_graded_file_reads_one_size(tmp_path, capsys):
     medium = _import(tmp_path, sizes=("M", "L"))
     assert len(medium.panels) == 4 and "sizes M, L in the file" in capsys.readouterr().out
@@ -97,15 +105,18 @@ def _broken(tmp_path, kind):
         block = doc.blocks.new("P0")
         if kind == "no-boundary":
             block.add_line((0, 0), (100, 0), dxfattribs={"layer": "1"})
-        else:  # a bow tie
+        elif kind == "bow-tie":  # two equal lobes: no area
             block.add_lwpolyline([(0, 0), (100, 100), (100, 0), (0, 100)], close=True, dxfattribs={"layer": "1"})
+        else:  # a figure eight with unequal lobes
+            block.add_lwpolyline([(0, 0), (300, 200), (300, 0), (0, 100)], close=True, dxfattribs={"layer": "1"})
         doc.modelspace().add_blockref("P0", (0, 0))
         doc.saveas(path)
     return path
 
 
 @pytest.mark.parametrize("kind, words", [("empty", "no pattern pieces"), ("truncated", ""),
-                                         ("no-boundary", "no boundary on layer 1"), ("bow-tie", "P0")])
+                                         ("no-boundary", "no boundary on layer 1"), ("bow-tie", "P0"),
+                                         ("figure-eight", "piece 'P0': the layer 1 boundary crosses itself near (")])
 def test_a_broken_file_gives_one_line_and_exit_2(tmp_path, capsys, kind, words):
     path = _broken(tmp_path, kind)
     out = tmp_path / "out.json"

@@ -65,6 +65,7 @@ class Piece:
     holes: list = field(default_factory=list)
     marks: list = field(default_factory=list)  # (kind, points (k, 2) [cm]) kept from the file
     placement: dict | None = None  # tailor's own placement, when the file was written by tailor
+    mirror: bool = True  # quantity 2 is a mirrored pair (a ``Mirror: N`` text: two alike)
 
 
 def _fail(path, what: str):
@@ -149,7 +150,7 @@ def _loops(entities, path, name):
     loops = [_clean(np.array([(v.x, v.y) for v in dxfpath.make_path(e).flattening(0.1)], float)) for e in found]
     loops = [p for p in loops if len(p) >= 3]
     if not loops or max(abs(_area(p)) for p in loops) < 1e-12:
-        _fail(path, f"piece {name!r}: the layer 1 boundary encloses no area")
+        _fail(path, f"piece {name!r}: the layer 1 boundary encloses no area (or crosses itself)")
     loops.sort(key=lambda p: -abs(_area(p)))
     outer = Polygon(loops[0])
     holes = [p for p in loops[1:] if abs(_area(p)) > 1e-12 and outer.contains(Point(p.mean(axis=0)))]
@@ -233,12 +234,28 @@ def _piece(name, entities, scale, path) -> Piece:
         quantity = max(1, int(re.match(r"\s*(\d+)", texts.get("quantity", "1")).group(1)))
     except (AttributeError, ValueError):
         quantity = 1
+    _simple(outline, path, label, scale)
     every = np.concatenate([outline, *(h for h, _ in holes)])
     notches = _notches(entities, every) * scale
     marks = [("notch", n[None]) for n in notches] + [(kind, pts * scale) for kind, pts in _marks(entities)]
     return Piece(label.strip(), outline * scale, corners, _grain(entities), notches, quantity, texts.get("size"),
                  texts.get("category", "").strip(), [(h * scale, c) for h, c in holes], marks,
-                 _tailor_placement(texts.get("tailor placement")))
+                 _tailor_placement(texts.get("tailor placement")),
+                 not texts.get("mirror", "yes").strip().lower().startswith(("n", "0", "false")))
+
+
+def _simple(outline, path, name, scale) -> None:
+    """A one-line error naming the piece, the layer and where, if its boundary crosses itself."""
+    from shapely.geometry import LineString, Polygon
+    from shapely.validation import explain_validity
+
+    poly = Polygon(outline)
+    if LineString(np.vstack([outline, outline[:1]])).is_simple and poly.is_valid:
+        return
+    why = explain_validity(poly)
+    at = re.search(r"\[([-\d.e]+)\s+([-\d.e]+)\]", why)
+    where = f" near ({float(at.group(1)) * scale:.1f}, {float(at.group(2)) * scale:.1f}) cm" if at else ""
+    _fail(path, f"piece {name!r}: the layer 1 boundary crosses itself{where}")
 
 
 def _tailor_placement(text):

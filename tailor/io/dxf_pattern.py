@@ -21,7 +21,7 @@ alone (no waistband, no bodice), are held at the waist by their top edges.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -306,12 +306,12 @@ def pieces_to_pattern(pieces, name: str, *, seams: str = "auto", sidecar=None) -
     for p in pieces:
         expanded.append(p)
         if p.quantity >= 2:
-            expanded.append(_mirrored(p))
+            expanded.append(_mirrored(p) if p.mirror else replace(p, name=f"{p.name}_2", quantity=1))
     names = [p.name for p in expanded]
     if len(set(names)) < len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
         expanded = [Piece(f"{p.name}_{i}" if p.name in dup else p.name, p.outline, p.corners, p.grain, p.notches,
-                          1, p.size, p.category, p.holes, p.marks, p.placement) for i, p in enumerate(expanded)]
+                          1, p.size, p.category, p.holes, p.marks, p.placement, p.mirror) for i, p in enumerate(expanded)]
     sides = [_sides(k, p) for k, p in enumerate(expanded)]
     # held at the waist by their top edges: waistbands, or the skirt pieces of a skirt alone
     skirt_only = all(_words(p) & {"skirt", "gore"} for p in expanded)
