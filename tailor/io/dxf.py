@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import PatternError
 
-__all__ = ["Piece", "read_dxf", "quiet_ezdxf", "CORNER_DEG", "UNITS_CM"]
+__all__ = ["Piece", "read_dxf", "quiet_ezdxf", "nearest_on_polyline", "CORNER_DEG", "UNITS_CM"]
 
 CORNER_DEG = 25.0
 """Without turn points, a boundary vertex where the outline turns more than this is a corner."""
@@ -210,10 +210,18 @@ def _notches(entities, outline) -> np.ndarray:
 
 def _distance(outline, q) -> float:
     """Distance from point ``q`` to the closed outline."""
-    a, b = outline, np.roll(outline, -1, axis=0)
+    return nearest_on_polyline(np.vstack([outline, outline[:1]]), q)[0]
+
+
+def nearest_on_polyline(points, q) -> tuple[float, float]:
+    """(distance, arc length from the start) of the point of the polyline ``points`` nearest ``q``."""
+    a, b = points[:-1], points[1:]
     ab = b - a
     t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0.0, 1.0)
-    return float(np.linalg.norm(a + t[:, None] * ab - q, axis=1).min())
+    d = np.linalg.norm(a + t[:, None] * ab - q, axis=1)
+    j = int(np.argmin(d))
+    seg = np.linalg.norm(ab, axis=1)
+    return float(d[j]), float(seg[:j].sum() + t[j] * seg[j])
 
 
 def _piece(name, entities, scale, path) -> Piece:

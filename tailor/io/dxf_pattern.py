@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import PatternError
-from .dxf import Piece
+from .dxf import Piece, nearest_on_polyline
 
 __all__ = ["pieces_to_pattern", "SEAM_LENGTH_TOLERANCE", "NOTCH_TOLERANCE_CM"]
 
@@ -82,20 +82,10 @@ def _sides(k: int, p: Piece) -> list:
             idx = np.arange(a, b + 1) if b > a else np.concatenate([np.arange(a, len(loop)), np.arange(0, b + 1)])
             pts = loop[idx]
             along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-            found = [at for d, at in (_project(pts, along, n) for n in p.notches)
+            found = [at for d, at in (nearest_on_polyline(pts, n) for n in p.notches)
                      if d < 0.3 and 1e-6 < at < along[-1] - 1e-6]  # notches on this side, by distance along it
             out.append(_Side(k, hole, s, pts, float(along[-1]), np.sort(found)))
     return out
-
-
-def _project(pts, along, q):
-    """(distance, arc length along the polyline ``pts``) of the point of the polyline nearest ``q``."""
-    a, b = pts[:-1], pts[1:]
-    ab = b - a
-    t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0.0, 1.0)
-    d = np.linalg.norm(a + t[:, None] * ab - q, axis=1)
-    j = int(np.argmin(d))
-    return float(d[j]), float(along[j] + t[j] * np.linalg.norm(ab[j]))
 
 
 def _edge(points, start: int, end: int) -> dict:
