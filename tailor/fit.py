@@ -262,6 +262,11 @@ def vertex_areas(x, faces, n: int) -> np.ndarray:
     return np.bincount(faces.reshape(-1), weights=np.repeat(face_areas(x, faces) / 3.0, 3), minlength=n)
 
 
+def _pressure(normal_force, x, faces) -> np.ndarray:
+    """Pressure [kPa] of a normal force per vertex [N] over the vertex's share of the area at ``x``."""
+    return normal_force / np.maximum(vertex_areas(x, faces, len(x)), 1e-12) * 1e-3
+
+
 def body_gap(x, body_x, body_faces):
     """Signed distance [m] from each point to the body surface (negative inside) and the body's
     outward normal at its nearest point; exact within the last of :data:`GAP_REACH`."""
@@ -360,8 +365,7 @@ def fit_map(source, frame: int = -1, *, ease: bool = True) -> FitMap:
         raise TailorError(f"{anim.name}: the run has no body frames (drape with --with-body) and no body was given "
                           "(--body): gap, pressure and ease need the body")
     dist, normal = body_gap(x, *body)
-    pressure = np.maximum(np.einsum("ij,ij->i", contact, normal), 0.0) / np.maximum(
-        vertex_areas(x, faces, len(x)), 1e-12) * 1e-3
+    pressure = _pressure(np.maximum(np.einsum("ij,ij->i", contact, normal), 0.0), x, faces)
     found = {}
     if ease:
         try:
@@ -403,8 +407,7 @@ def vertex_field(anim, k: int, name: str) -> np.ndarray:
         fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
         normal = np.stack([np.bincount(faces.reshape(-1), weights=np.repeat(fn[:, i], 3), minlength=n) for i in range(3)], 1)
         normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
-        along = np.abs(np.einsum("ij,ij->i", anim.contact_forces[k], normal))
-        return along / np.maximum(vertex_areas(x, faces, n), 1e-12) * 1e-3
+        return _pressure(np.abs(np.einsum("ij,ij->i", anim.contact_forces[k], normal)), x, faces)
     if name == "gap":
         if not anim.has_body:
             raise TailorError(f"{anim.name}: colouring by gap needs the body (drape with --with-body)")

@@ -61,8 +61,8 @@ def write_ply(path, vertices, faces, *, vertex_props=None, face_props=None) -> N
         fh.write(fa.tobytes())
 
 
-def _band_colours(values, top):
-    """RGB per value: its band of 8 between 0 and ``top`` (per value or one), clipped."""
+def band_colours(values, top):
+    """RGB per value: its band of :data:`BANDS` between 0 and ``top`` (per value or one), clipped."""
     t = np.clip(np.asarray(values, float) / np.maximum(top, 1e-12), 0.0, 1.0 - 1e-9)
     return np.asarray(BAND_COLOURS)[(t * BANDS).astype(int)]
 
@@ -98,7 +98,7 @@ def strain_picture(path, fit, body=None, maximum: float | None = None) -> None:
         top, bar_top, label = wearable, float(fit.wearable[0]), "stretch % (scale: the fabric's wearable stretch)"
     else:
         top, bar_top, label = wearable, 100.0, "stretch, % of each fabric's wearable stretch"
-    _picture(path, fit, body, _band_colours(fit.stretch_max, top), _bar(bar_top, label),
+    _picture(path, fit, body, band_colours(fit.stretch_max, top), _bar(bar_top, label),
              f"strain map, frame {fit.frame}")
 
 
@@ -112,16 +112,13 @@ def nice_top(values, floor: float = 0.01) -> float:
     return float(next(m * e for m in (1, 1.5, 2, 3, 4, 5, 6, 8, 10) if m * e >= top * (1 - 1e-12)))
 
 
-def band_colours(values, top):
-    """RGB per value: its band of :data:`BANDS` between 0 and ``top`` (per value or one), clipped."""
-    return _band_colours(values, top)
 
 
 def pressure_picture(path, fit, body=None) -> None:
     """The pressure map (per face, the mean of its vertices' pressure), front and back."""
     top = nice_top(fit.pressure_kpa)
     face = fit.pressure_kpa[fit.faces].mean(axis=1)
-    _picture(path, fit, body, _band_colours(face, top), _bar(top, "contact pressure, kPa"),
+    _picture(path, fit, body, band_colours(face, top), _bar(top, "contact pressure, kPa"),
              f"pressure map, frame {fit.frame}")
 
 
