@@ -284,3 +284,23 @@ def _side_vertices(pattern, plan, edge_vertices, side) -> np.ndarray:
     i1 = int(np.flatnonzero(np.isclose(fractions, side.hi))[-1])
     ids = edge_vertices[key][i0 : i1 + 1]
     return ids[::-1] if side.reversed else ids
+
+
+def disk_mesh(radii, resolution: float, *, min_angle: float = MIN_ANGLE_DEG) -> tuple[np.ndarray, np.ndarray, list]:
+    """(uv, faces, rings) of a disk of radius ``max(radii)`` [m] with a ring of vertices on every
+    circle of ``radii`` (the test specimen's clamp edge, its rim); ``rings[k]`` lists ring k's
+    vertex ids counter-clockwise."""
+    pts, segs, rings = [], [], []
+    start = 0
+    for radius in radii:
+        n = max(12, int(math.ceil(2.0 * math.pi * radius / resolution)))
+        t = 2.0 * math.pi * np.arange(n) / n
+        pts.append(np.column_stack([radius * np.cos(t), radius * np.sin(t)]))
+        ids = start + np.arange(n)
+        segs.append(np.column_stack([ids, np.roll(ids, -1)]))
+        rings.append(ids)
+        start += n
+    max_area = math.sqrt(3.0) / 4.0 * resolution**2
+    out = _triangle.triangulate({"vertices": np.vstack(pts), "segments": np.vstack(segs)}, f"pq{min_angle:g}a{max_area:.12f}YQ")
+    return out["vertices"], out["triangles"].astype(np.intp), rings
+

@@ -22,20 +22,20 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .bench import rest_error
+from .lab import drape_test
 from .errors import SimulationUnstable
 from .fabric import PRESETS, Fabric, preset
 from .mesh import discretise
 from .model import build_model
 from .scenes import Setup, grid, sphere
 
-__all__ = ["bottino_fabric", "patch_scene", "cusick", "CusickResult", "validate", "drape_coefficient", "count_nodes",
-           "BOTTINO_SCENES"]
+__all__ = ["bottino_fabric", "patch_scene", "validate", "BOTTINO_SCENES"]
 
 log = logging.getLogger(__name__)
 
@@ -124,79 +124,6 @@ def _shape_distance(a, b) -> float:
     return rest_error(mesh_a.uv, xa, mesh_b.uv, xb)[0]
 
 
-@dataclass
-class CusickResult:
-    """A settled Cusick specimen: drape coefficient, nodes, shadow outline and positions."""
-
-    fabric: str
-    drape_coefficient: float
-    nodes: int
-    shadow: object = field(repr=False)
-    x: np.ndarray = field(repr=False)
-    faces: np.ndarray = field(repr=False)
-    wall_s: float = 0.0
-
-
-SPECIMEN_RADIUS, DISK_RADIUS = 0.15, 0.09
-
-
-def drape_coefficient(x, faces, *, specimen_radius: float = SPECIMEN_RADIUS, disk_radius: float = DISK_RADIUS):
-    """(DC, shadow polygon): the union of the triangles seen from above against the annulus area."""
-    from shapely.geometry import Polygon
-    from shapely.ops import unary_union
-
-    tri = np.asarray(x)[np.asarray(faces)][:, :, :2]
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    keep = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]) > 1e-14  # edge-on triangles cast no shadow
-    shadow = unary_union([Polygon(t) for t in tri[keep]])
-    disk = math.pi * disk_radius**2
-    return (shadow.area - disk) / (math.pi * specimen_radius**2 - disk), shadow
-
-
-def count_nodes(x, boundary, *, prominence: float = 0.005) -> int:
-    """Folds of a draped specimen: peaks of the outline's radius around the centre (≥ ``prominence`` m)."""
-    p = np.asarray(x)[np.asarray(boundary)]
-    theta = np.arctan2(p[:, 1], p[:, 0])
-    order = np.argsort(theta)
-    r = np.hypot(p[order, 0], p[order, 1])
-    k = max(1, len(r) // 60)  # light circular smoothing
-    r = np.convolve(np.r_[r[-k:], r, r[:k]], np.ones(2 * k + 1) / (2 * k + 1), mode="same")[k:-k]
-    peaks = 0
-    n = len(r)
-    for i in range(n):
-        window = [r[(i + j) % n] for j in range(-n // 16, n // 16 + 1)]
-        if r[i] == max(window) and r[i] - min(window) >= prominence:
-            peaks += 1
-    return peaks
-
-
-def cusick(fabric: Fabric, *, resolution: float = 0.01, duration: float = 3.0) -> CusickResult:
-    """Drape the 30 cm specimen clamped on the 18 cm disk (vertices within 9 cm held) and measure it."""
-    from .io.pattern_json import pattern_from_dict
-    from .scenes import run_scene
-
-    arc = {"type": "circle", "params": [15, 0, 1]}  # the specimen as panels/cusick_specimen.json has it
-    pattern = pattern_from_dict({"pattern": {"panels": {"specimen": {
-        "vertices": [[15, 0], [0, 15], [-15, 0], [0, -15]],
-        "edges": [{"endpoints": [i, (i + 1) % 4], "curvature": arc} for i in range(4)]}}},
-        "properties": {"units_in_meter": 100, "curvature_coords": "relative"}}, source="cusick specimen")
-    mesh = discretise(pattern, resolution)
-    uv = mesh.uv - mesh.uv.mean(axis=0)
-    clamp = np.flatnonzero(np.hypot(uv[:, 0], uv[:, 1]) <= DISK_RADIUS)
-    model = build_model(mesh, fabric, pinned=clamp)
-    x0 = np.c_[uv, np.full(mesh.vertex_count, 0.5)]
-    # a tiny tilt-free perturbation: a perfectly symmetric specimen would pick its folds from round-off
-    rng = np.random.default_rng(0)
-    x0[:, 2] += 1e-4 * rng.standard_normal(mesh.vertex_count) * (np.hypot(uv[:, 0], uv[:, 1]) > DISK_RADIUS)
-    t0 = time.perf_counter()
-    result = run_scene(model, x0, duration=duration, fps=25, integrator="implicit", dt=0.005, self_collision="off")
-    x = result.frames[-1]
-    dc, shadow = drape_coefficient(x, mesh.faces)
-    boundary = np.concatenate([v[:-1] for k, v in mesh.edge_vertices.items() if k[1] is None])
-    return CusickResult(fabric.name, float(dc), count_nodes(x, boundary), shadow, x, mesh.faces,
-                        time.perf_counter() - t0)
-
-
 def _mm(a, b):
     """Bottino's metric between two runs [mm]; NaN if either stopped."""
     return math.nan if a is None or b is None else _shape_distance(a[:2], b[:2]) * 1e3
@@ -225,7 +152,6 @@ class _Plan:
     default_models: tuple
     duration: float
     cusick_fabrics: tuple
-    cusick_s: float
 
     @classmethod
     def of(cls, quick: bool, models) -> "_Plan":
@@ -236,7 +162,7 @@ class _Plan:
         return cls(quick, (11, 21) if quick else (11, 21, 31),
                    ("sphere", "hang") if quick else ("sphere", "cube80", "cube128", "cube55", "hang"),
                    ("A",) if quick else ("A", "B"), models, default, 1.2 if quick else 2.0,
-                   ("silk", "cotton", "denim") if quick else tuple(PRESETS), 2.0 if quick else 3.0)
+                   ("silk", "cotton", "denim") if quick else tuple(PRESETS))
 
     @property
     def jobs(self) -> list:
@@ -337,12 +263,12 @@ def _cusick_section(out, plan: _Plan, failed: list, tally: _Tally) -> list:
     """The Cusick drape test of every fabric: a table and the shadows' picture."""
     from .io.plots import shadow_plot
 
-    lines = [f"\n## Cusick drape test\n\n30 cm specimen clamped on an 18 cm disk, settled {plan.cusick_s:g} s; "
+    lines = ["\n## Cusick drape test\n\n30 cm specimen clamped on an 18 cm disk, laid down gently (`tailor fabric drape-test`); "
              "DC = (shadow − disk) / (specimen − disk).\n\n| fabric | bending c | DC | nodes | wall s |\n|---|---|---|---|---|\n"]
     results = []
     for name in plan.cusick_fabrics:
         try:
-            r = cusick(preset(name), resolution=0.02 if plan.quick else 0.01, duration=plan.cusick_s)
+            r = drape_test(preset(name), resolution=0.02 if plan.quick else 0.01)
         except SimulationUnstable as exc:
             failed.append(f"Cusick, {name}: {exc}")
             lines.append(f"| {name} | {preset(name).bending:g} | unstable | | |\n")

@@ -17,7 +17,7 @@ LAYERS = {
     "forces": 5, "collide": 5, "seams": 5,
     "integrators": 6, "contact": 6,
     "sim": 7, "scenes": 7, "dress": 7, "tearing": 7,
-    "io": 8, "fit": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9, "batch": 9, "validate": 9, "corpus": 9,
+    "io": 8, "fit": 8, "lab": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9, "batch": 9, "validate": 9, "corpus": 9,
 }
 OWNERS = {"triangle": {"mesh"}, "fcl": {"collide"}, "meshio": {"io"}, "skimage": {"mannequin"}, "matplotlib": {"io"},
           "pxr": {"io"}, "PIL": {"io"}, "ezdxf": {"io"}, "tqdm": {"cli"}, "yaml": {"io"},

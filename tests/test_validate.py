@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import tailor
-from tailor.validate import _run_patch, _shape_distance, bottino_fabric, count_nodes, cusick, drape_coefficient
+from tailor.lab import DrapeTest, count_nodes, drape_coefficient, drape_test
+from tailor.validate import _run_patch, _shape_distance, bottino_fabric
 
 
 def test_bottino_fabric_models():
@@ -60,7 +61,7 @@ def test_patch_meeting_a_cube_edge_lands_without_being_thrown_off():
 
 def test_drape_coefficient_grows_with_bending_and_lies_in_0_1():
     cotton = tailor.preset("cotton")
-    dc = [cusick(cotton.with_values(bending=c), resolution=0.02, duration=1.5).drape_coefficient for c in (1.0, 8.0, 60.0)]
+    dc = [drape_test(cotton.with_values(bending=c), resolution=0.02).drape_coefficient for c in (1.0, 8.0, 60.0)]
     assert 0.0 < dc[0] < dc[1] < dc[2] < 1.0
 
 
@@ -100,10 +101,10 @@ def test_a_run_that_stops_is_reported_and_does_not_cost_the_report(tmp_path, mon
         m = grid(0.3, 0.3, 5)
         x = np.c_[m.uv - 0.15, np.zeros(len(m.uv))]
         dc, shadow = drape_coefficient(x, m.faces)
-        return V.CusickResult(fabric.name, dc, 0, shadow, x, m.faces)
+        return DrapeTest(fabric.name, dc, 0, shadow, x, m.faces)
 
     monkeypatch.setattr(V, "_run_patch", fake_run)
-    monkeypatch.setattr(V, "cusick", fake_cusick)
+    monkeypatch.setattr(V, "drape_test", fake_cusick)
     text = V.validate(tmp_path, quick=True).read_text()
     assert "## Runs that stopped" in text
     assert "sphere, fabric A, auto, n = 21 (grid): simulation unstable" in text and "Cusick, silk" in text

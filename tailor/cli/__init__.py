@@ -16,6 +16,7 @@ from ..errors import TailorError
 from .body import add_body_commands
 from .drape import add_drape_command
 from .dxf import add_import_command
+from .fabric import add_fabric_commands
 from .fit import add_fit_command
 from .output import add_output_commands
 from .pattern import add_pattern_commands
@@ -34,6 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_body_commands(sub)
     add_drape_command(sub)
     add_fit_command(sub)
+    add_fabric_commands(sub)
     add_output_commands(sub)
     return p
 

@@ -72,3 +72,32 @@ def preview_options(parser) -> None:
     parser.add_argument("--color", default="panel", choices=["panel", "stretch", "pressure", "gap"],
                         help="colour the garment by panel (default) or by its fit: stretch %%, contact pressure, "
                              "gap to the body (gap needs the body: drape --with-body)")
+
+
+def fabric_options(parser, *, bending: bool = True) -> None:
+    """``--density``, ``--stretch``, ``--stretch-weft`` (and ``--bending``): a preset's numbers overridden."""
+    parser.add_argument("--density", type=float, metavar="G_M2", help="areal density, g/m²")
+    parser.add_argument("--stretch", type=float, metavar="PCT", help="stretch under own weight (warp and weft), %%")
+    parser.add_argument("--stretch-weft", type=float, metavar="PCT", help="a different stretch across the grain, %%")
+    if bending:
+        parser.add_argument("--bending", type=float, metavar="C", help="bending number c (cube of the bending length in cm)")
+
+
+def fabric_from_args(args, name: str | None = None):
+    """The preset ``args.fabric`` (or ``name``) with the numbers given by :func:`fabric_options`."""
+    from ..fabric import preset
+
+    fabric = preset(name or args.fabric)
+    values = {}
+    if args.density is not None:
+        values["density"] = args.density * 1e-3
+    if args.stretch is not None:
+        values["stretch_warp"] = values["stretch_weft"] = args.stretch * 1e-2
+    if args.stretch_weft is not None:
+        values["stretch_weft"] = args.stretch_weft * 1e-2
+    if args.bending is not None:
+        values["bending"] = args.bending
+    if not values:
+        return fabric
+    return fabric.with_values(name=f"{fabric.name} (custom)", **values)
+

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..errors import TailorError
 from .body import _read_body_args, body_source
+from .common import fabric_from_args, fabric_options
 
 
 def _pattern_summary(pattern) -> list[str]:
@@ -81,24 +82,6 @@ def _cmd_draw(args) -> int:
     return 0
 
 
-def _fabric_from_args(args):
-    from ..fabric import preset
-
-    fabric = preset(args.fabric)
-    values = {}
-    if args.density is not None:
-        values["density"] = args.density * 1e-3
-    if args.stretch is not None:
-        values["stretch_warp"] = values["stretch_weft"] = args.stretch * 1e-2
-    if args.stretch_weft is not None:
-        values["stretch_weft"] = args.stretch_weft * 1e-2
-    if args.bending is not None:
-        values["bending"] = args.bending
-    if not values:
-        return fabric
-    return fabric.with_values(name=f"{fabric.name} (custom)", **values)
-
-
 def _cmd_params(args) -> int:
     import json
 
@@ -108,7 +91,7 @@ def _cmd_params(args) -> int:
         from ..errors import FabricError
 
         raise FabricError(f"--resolution must be positive, got {args.resolution:g} cm")
-    fabric = _fabric_from_args(args)
+    fabric = fabric_from_args(args)
     p = fabric_params(fabric, args.resolution * 1e-2)
     if args.json:
         print(json.dumps({"fabric": fabric.name, **p.as_dict()}, indent=2))
@@ -194,10 +177,7 @@ def add_pattern_commands(sub) -> None:
 
     q = sub.add_parser("params", help="the simulation parameters derived from a fabric (Carignan Eq. 21-26)")
     q.add_argument("--fabric", default=DEFAULT_FABRIC, choices=fabric_names(), help=f"preset (default {DEFAULT_FABRIC})")
-    q.add_argument("--density", type=float, metavar="G_M2", help="areal density, g/m²")
-    q.add_argument("--stretch", type=float, metavar="PCT", help="stretch under own weight (warp and weft), %%")
-    q.add_argument("--stretch-weft", type=float, metavar="PCT", help="a different stretch across the grain, %%")
-    q.add_argument("--bending", type=float, metavar="C", help="bending number c (cube of the bending length in cm)")
+    fabric_options(q)
     q.add_argument("--resolution", type=float, default=1.5, metavar="CM", help="element size (cm, default 1.5)")
     q.add_argument("--json", action="store_true", help="machine-readable output")
     q.set_defaults(func=_cmd_params)
