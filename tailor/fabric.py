@@ -11,7 +11,7 @@ Examples
 >>> f.density  # kg/m²
 0.4
 >>> fabric_names()[:3]
-('chiffon', 'silk', 'cotton')
+('chiffon', 'organza', 'silk')
 """
 
 from __future__ import annotations
@@ -166,19 +166,34 @@ def _p(name, g_m2, stretch_pct, bending, friction=0.4, thickness_mm=1.0, weft_pc
 PRESETS: dict[str, Fabric] = {
     f.name: f
     for f in (
-        # tear strains: elongation at break of the woven/knitted/leather classes (order of magnitude);
-        # wearable stretch: the comfortable stretch of the class (docs/fabrics.md)
-        _p("chiffon", 35, 3.0, 0.3, 0.3, 0.3, tear_pct=20.0, wearable_pct=8.0),
-        _p("silk", 50, 2.0, 1.0, 0.25, 0.3, tear_pct=20.0, wearable_pct=6.0),
+        # bending c = (bending length in cm)³, typical of the class; drape-tested against published
+        # ranges (docs/fabrics.md, tailor.lab.DRAPE_RANGES). Tear strains: elongation at break of the
+        # class (order of magnitude); wearable stretch: the comfortable stretch of the class
+        _p("chiffon", 35, 3.0, 1.7, 0.3, 0.3, tear_pct=20.0, wearable_pct=8.0),
+        _p("organza", 45, 1.5, 12.2, 0.3, 0.3, tear_pct=20.0, wearable_pct=3.0),
+        _p("silk", 55, 2.0, 2.7, 0.25, 0.3, tear_pct=20.0, wearable_pct=6.0),
+        _p("satin", 100, 1.5, 3.4, 0.25, 0.35, tear_pct=20.0, wearable_pct=5.0),
+        _p("crepe", 110, 3.0, 2.2, 0.4, 0.4, tear_pct=25.0, wearable_pct=8.0),
+        _p("poplin", 115, 1.0, 12.2, 0.4, 0.3, tear_pct=25.0, wearable_pct=4.0),
         _p("cotton", 120, 1.0, 8.0, 0.4, 0.5, tear_pct=25.0, wearable_pct=5.0),
+        _p("linen", 170, 1.0, 17.6, 0.45, 0.5, tear_pct=25.0, wearable_pct=3.0),
         _p("jersey", 180, 8.0, 4.0, 0.5, 0.8, weft_pct=15.0, tear_pct=100.0, wearable_pct=30.0),
+        _p("rib_knit", 230, 10.0, 4.1, 0.5, 1.2, weft_pct=25.0, tear_pct=150.0, wearable_pct=50.0),
+        _p("twill", 230, 0.8, 24.4, 0.45, 0.6, tear_pct=25.0, wearable_pct=4.0),
         _p("wool", 280, 1.5, 15.0, 0.5, 1.5, tear_pct=30.0, wearable_pct=6.0),
+        _p("fleece", 280, 5.0, 10.6, 0.6, 2.5, weft_pct=10.0, tear_pct=80.0, wearable_pct=15.0),
+        _p("denim_10oz", 340, 0.6, 32.8, 0.5, 0.8, tear_pct=25.0, wearable_pct=3.0),
+        _p("canvas", 400, 0.5, 74.0, 0.5, 1.0, tear_pct=25.0, wearable_pct=2.0),
         _p("denim", 400, 0.5, 60.0, 0.5, 1.0, tear_pct=25.0, wearable_pct=3.0),
-        _p("leather", 1000, 0.3, 300.0, 0.6, 1.2, tear_pct=50.0, wearable_pct=10.0),
+        _p("denim_14oz", 475, 0.5, 54.9, 0.5, 1.1, tear_pct=25.0, wearable_pct=3.0),
+        _p("melton", 550, 1.5, 32.8, 0.6, 2.5, tear_pct=30.0, wearable_pct=4.0),
+        _p("leather", 650, 1.5, 27.0, 0.6, 0.8, tear_pct=50.0, wearable_pct=8.0),
         _p("heavy_leather", 10000, 0.2, 1000.0, 0.6, 3.0, tear_pct=50.0, wearable_pct=5.0),
     )
 }
-"""Named fabrics, light to heavy. ``heavy_leather`` is Carignan's 1.0 g/cm² extreme."""
+"""Named fabrics, light to heavy: ``denim`` is 12 oz/yd², ``twill`` a chino, ``wool`` a suiting,
+``leather`` garment (lamb nappa) leather. ``heavy_leather`` is Carignan's 1.0 g/cm² extreme, kept
+for the stability tests and not a garment fabric."""
 
 def _kes(name, g_m2, warp, weft, shear_g, bending_b, friction=0.4, thickness_mm=0.5):
     """A Kawabata fabric from five-segment tensile curves [(strain, N/m)], shear G and bending B.

@@ -34,7 +34,7 @@ from .mesh import GarmentMesh, disk_mesh
 from .model import build_model
 from .units import CM, GRAVITY
 
-__all__ = ["SPECIMEN_RADIUS", "DISK_RADIUS", "DRAPE_RESOLUTION", "DrapeTest", "drape_test", "specimen_mesh",
+__all__ = ["SPECIMEN_RADIUS", "DISK_RADIUS", "DRAPE_RESOLUTION", "DRAPE_RANGES", "DrapeTest", "drape_test", "specimen_mesh",
            "drape_coefficient", "count_nodes"]
 
 SPECIMEN_RADIUS, DISK_RADIUS = 0.15, 0.09
@@ -96,6 +96,19 @@ def count_nodes(x, boundary, *, prominence: float = 0.005) -> int:
     r = np.convolve(np.r_[r[-k:], r, r[:k]], np.ones(2 * k + 1) / (2 * k + 1), mode="same")[k:-k]
     peaks, _ = find_peaks(np.tile(r, 3), prominence=prominence)
     return int(np.count_nonzero((peaks >= n) & (peaks < 2 * n)))
+
+
+DRAPE_RANGES = {
+    # preset: (DC low, DC high, nodes low, nodes high) of its fabric class (docs/fabrics.md says where from)
+    "chiffon": (0.15, 0.35, 7, 12), "organza": (0.55, 0.85, 4, 7), "silk": (0.20, 0.45, 7, 11),
+    "satin": (0.25, 0.50, 6, 10), "crepe": (0.20, 0.45, 7, 11), "poplin": (0.50, 0.75, 4, 7),
+    "cotton": (0.45, 0.70, 5, 8), "linen": (0.55, 0.80, 4, 7), "jersey": (0.20, 0.45, 6, 10),
+    "rib_knit": (0.25, 0.50, 6, 9), "twill": (0.65, 0.88, 3, 6), "wool": (0.45, 0.75, 4, 7),
+    "fleece": (0.45, 0.75, 4, 7), "denim_10oz": (0.70, 0.92, 3, 6), "canvas": (0.85, 0.97, 3, 5),
+    "denim": (0.80, 0.95, 3, 5), "denim_14oz": (0.80, 0.95, 3, 5), "melton": (0.70, 0.92, 3, 6),
+    "leather": (0.60, 0.90, 3, 6),
+}
+"""Published Cusick drape coefficients and node counts of each preset's fabric class (30 cm on 18 cm)."""
 
 
 @dataclass

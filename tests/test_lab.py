@@ -8,7 +8,7 @@ import pytest
 
 import tailor
 from tailor.cli import main
-from tailor.lab import (DISK_RADIUS, KES_LOAD, SPECIMEN_RADIUS, calibrate_bending, cantilever_test, count_nodes,
+from tailor.lab import (DISK_RADIUS, DRAPE_RANGES, KES_LOAD, SPECIMEN_RADIUS, calibrate_bending, cantilever_test, count_nodes,
                         drape_test, fabric_from_cantilever, fabric_from_kes, peirce_bending_length, specimen_mesh)
 from tailor.params import stretch_stiffness
 
@@ -113,3 +113,24 @@ def test_cli_kes_file_errors_name_the_file_and_the_field(tmp_path, capsys):
     bad.write_text("{nope")
     assert main(["fabric", "calibrate", "--kes", str(bad)]) == 2
     assert "not JSON" in capsys.readouterr().err
+
+
+def _in_published_range(name):
+    dc_lo, dc_hi, n_lo, n_hi = DRAPE_RANGES[name]
+    test = drape_test(tailor.preset(name))
+    assert dc_lo <= test.drape_coefficient <= dc_hi and n_lo <= test.nodes <= n_hi, (name, test.drape_coefficient, test.nodes)
+
+
+def test_garment_leather_folds_like_leather():
+    # the stiff end folds: 3 to 6 nodes (it used to stay a flat disk, DC 0.99 and 0 nodes)
+    _in_published_range("leather")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(DRAPE_RANGES))
+def test_every_preset_drapes_inside_its_fabrics_published_range(name):
+    _in_published_range(name)
+
+
+def test_every_preset_but_the_extreme_has_a_published_range():
+    assert set(DRAPE_RANGES) == set(tailor.PRESETS) - {"heavy_leather"}
