@@ -171,7 +171,7 @@ PRESETS: dict[str, Fabric] = {
         # class (order of magnitude); wearable stretch: the comfortable stretch of the class
         _p("chiffon", 35, 3.0, 1.7, 0.3, 0.3, tear_pct=20.0, wearable_pct=8.0),
         _p("organza", 45, 1.5, 12.2, 0.3, 0.3, tear_pct=20.0, wearable_pct=3.0),
-        _p("silk", 55, 2.0, 2.7, 0.25, 0.3, tear_pct=20.0, wearable_pct=6.0),
+        _p("silk", 50, 2.0, 2.7, 0.25, 0.3, tear_pct=20.0, wearable_pct=6.0),
         _p("satin", 100, 1.5, 3.4, 0.25, 0.35, tear_pct=20.0, wearable_pct=5.0),
         _p("crepe", 110, 3.0, 2.2, 0.4, 0.4, tear_pct=25.0, wearable_pct=8.0),
         _p("poplin", 115, 1.0, 12.2, 0.4, 0.3, tear_pct=25.0, wearable_pct=4.0),

@@ -45,7 +45,6 @@ def test_the_simulated_cantilever_keeps_the_fabrics_bending_length():
     assert 0.90 * 0.02 <= warp.bending_length <= 1.02 * 0.02
     stiffer = cantilever_test(cotton.with_values(bending=27.0))  # 3 cm
     assert 0.88 * 0.03 <= stiffer.bending_length <= 1.02 * 0.03
-    assert cantilever_test(cotton, direction="weft").bending_length == pytest.approx(warp.bending_length, rel=0.02)
 
 
 def test_a_measured_bending_length_calibrates_within_5_percent():
@@ -64,8 +63,8 @@ def test_kawabata_numbers_give_the_bending_length_and_the_tensile_secant():
 
 def test_drape_coefficient_calibration_round_trip_coarse():
     target = 0.55
-    fabric, test = calibrate_bending(tailor.preset("cotton"), target, resolution=0.02)
-    again = drape_test(fabric, resolution=0.02, seed=1)
+    fabric, test = calibrate_bending(tailor.preset("cotton"), target, resolution=0.03)
+    again = drape_test(fabric, resolution=0.03, seed=1)
     assert test.drape_coefficient == pytest.approx(target, abs=0.01)
     assert again.drape_coefficient == pytest.approx(target, abs=0.03)
 

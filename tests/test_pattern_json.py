@@ -116,7 +116,7 @@ def test_non_numeric_coordinate(square_doc):
         (("fabric",), {"stretch": 0}, "fabric.stretch: must be positive"),
         (("fabric",), {"bending": -1}, "fabric.bending: must be >= 0"),
         (("properties", "units_in_meter"), -100, "properties.units_in_meter: must be positive"),
-        (("fabric",), "satin", "unknown fabric 'satin'"),
+        (("fabric",), "brocade", "unknown fabric 'brocade'"),
     ],
 )
 def test_bad_numbers(square_doc, field, value, needle):

@@ -109,4 +109,4 @@ def test_a_run_that_stops_is_reported_and_does_not_cost_the_report(tmp_path, mon
     assert "## Runs that stopped" in text
     assert "sphere, fabric A, auto, n = 21 (grid): simulation unstable" in text and "Cusick, silk" in text
     assert "| 11 |  | — |" in text  # the auto table's missing cell
-    assert "| silk | 1 | unstable |" in text and "| cotton |" in text
+    assert "| silk | 2.7 | unstable |" in text and "| cotton |" in text
