@@ -171,8 +171,8 @@ def drape_test(fabric: Fabric, *, resolution: float = DRAPE_RESOLUTION, lay: flo
                      time.perf_counter() - t0)
 
 
-STRIP_WIDTH, PEIRCE_ANGLE = 2.5 * CM, math.radians(41.5)
-"""The cantilever strip's width [m] and the standard's end-point slope (ASTM D1388: tan 41.5° = 0.5·… so l = 2C)."""
+STRIP_WIDTH = 2.5 * CM
+"""The cantilever strip's width [m] (ASTM D1388)."""
 
 
 def peirce_bending_length(overhang: float, angle: float) -> float:
@@ -201,6 +201,7 @@ class CantileverTest:
     wall_s: float = 0.0
 
     def as_dict(self) -> dict:
+        """The numbers a lab sheet gives (for ``--json``), in cm and degrees."""
         return {"fabric": self.fabric, "direction": self.direction, "bending_length_cm": round(self.bending_length / CM, 3),
                 "nominal_cm": round(self.nominal / CM, 3), "overhang_cm": round(self.overhang / CM, 3),
                 "tip_angle_deg": round(math.degrees(self.angle), 2), "wall_s": round(self.wall_s, 2)}

@@ -108,7 +108,7 @@ def test_cli_kes_file_errors_name_the_file_and_the_field(tmp_path, capsys):
     bad.write_text(json.dumps({"W": 150, "B": {"warp": 0.1}, "EMT": 5}))
     assert main(["fabric", "calibrate", "--kes", str(bad)]) == 2
     err = capsys.readouterr().err
-    assert str(bad) in err and "B:" in err
+    assert str(bad) in err and "B.weft:" in err  # the missing direction, by name
     bad.write_text("{nope")
     assert main(["fabric", "calibrate", "--kes", str(bad)]) == 2
     assert "not JSON" in capsys.readouterr().err

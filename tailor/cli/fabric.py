@@ -64,25 +64,33 @@ def _cmd_cantilever_test(args) -> int:
     return 0
 
 
+def _kes_number(path: str, key: str, value, unit: str) -> float:
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not value > 0:
+        raise TailorError(f"{path}: {key}: expected a number above 0 ({unit}), got {value!r}")
+    return float(value)
+
+
+def _kes_pair(path: str, key: str, value, unit: str) -> tuple[float, float]:
+    """(warp, weft) of a KES field given as one number or as ``{"warp": …, "weft": …}``."""
+    if isinstance(value, dict):
+        return tuple(_kes_number(path, f"{key}.{d}", value.get(d), unit) for d in ("warp", "weft"))
+    v = _kes_number(path, key, value, unit)
+    return v, v
+
+
 def _read_kes(path: str) -> dict:
+    """W [g/m²], B [gf·cm²/cm] (the mean of warp and weft) and EMT [%] per direction from a JSON file."""
     try:
         data = json.loads(Path(path).read_text())
     except OSError as exc:
         raise TailorError(f"{path}: cannot read: {exc.strerror}") from None
     except json.JSONDecodeError as exc:
         raise TailorError(f"{path}: not JSON: {exc.msg} at line {exc.lineno}") from None
-    out = {}
-    for key in ("W", "B", "EMT"):
-        value = data.get(key) if isinstance(data, dict) else None
-        if isinstance(value, dict):  # {"warp": …, "weft": …}: B and W as the mean, EMT per direction
-            value = value.get("warp") if key == "EMT" else None if not all(k in value for k in ("warp", "weft")) else \
-                0.5 * (value["warp"] + value["weft"])
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or not value > 0:
-            raise TailorError(f"{path}: {key}: expected a number above 0 (W g/m², B gf·cm²/cm, EMT %), got {value!r}")
-        out[key] = float(value)
-    weft = data["EMT"].get("weft") if isinstance(data["EMT"], dict) else None
-    out["EMT_weft"] = float(weft) if isinstance(weft, (int, float)) and weft > 0 else None
-    return out
+    if not isinstance(data, dict):
+        raise TailorError(f'{path}: expected an object {{"W": …, "B": …, "EMT": …}}')
+    bending = _kes_pair(path, "B", data.get("B"), "gf·cm²/cm")
+    emt = _kes_pair(path, "EMT", data.get("EMT"), "%")
+    return {"W": _kes_number(path, "W", data.get("W"), "g/m²"), "B": 0.5 * sum(bending), "EMT": emt[0], "EMT_weft": emt[1]}
 
 
 def _calibrated(args, base):
