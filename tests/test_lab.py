@@ -63,8 +63,8 @@ def test_kawabata_numbers_give_the_bending_length_and_the_tensile_secant():
 
 def test_drape_coefficient_calibration_round_trip_coarse():
     target = 0.55
-    fabric, test = calibrate_bending(tailor.preset("cotton"), target, resolution=0.03)
-    again = drape_test(fabric, resolution=0.03, seed=1)
+    fabric, test = calibrate_bending(tailor.preset("cotton"), target, resolution=0.03, specimens=1)
+    again = drape_test(fabric, resolution=0.03, specimens=1, seed=1)
     assert test.drape_coefficient == pytest.approx(target, abs=0.01)
     assert again.drape_coefficient == pytest.approx(target, abs=0.03)
 
@@ -76,13 +76,20 @@ def test_drape_coefficient_calibration_round_trip(target):
     assert drape_test(fabric, seed=1).drape_coefficient == pytest.approx(target, abs=0.03)
 
 
-@pytest.mark.slow
-@pytest.mark.xfail(reason="not converged to 0.02 yet: wool 0.636 at 1 cm, 0.667 at 0.75 cm (5 and 6 nodes); "
-                          "one specimen, not the standard's average of three", strict=False)
-def test_the_drape_coefficient_converges_with_the_mesh():
+def test_the_drape_coefficient_converges_with_the_mesh_coarse():
+    # three specimens averaged, as the standard does (one specimen moves by up to 0.03 with its folds)
     wool = tailor.preset("wool")
-    assert drape_test(wool, resolution=0.01).drape_coefficient == pytest.approx(
-        drape_test(wool, resolution=0.0075).drape_coefficient, abs=0.02)
+    coarse, fine = (drape_test(wool, resolution=r) for r in (0.015, 0.01))
+    assert coarse.drape_coefficient == pytest.approx(fine.drape_coefficient, abs=0.02)  # measured 0.631, 0.641
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["wool", "cotton"])
+def test_the_drape_coefficient_converges_with_the_mesh(name):
+    # at the default 1 cm against 0.75 cm: measured wool 0.641 / 0.659, cotton 0.548 / 0.564
+    fabric = tailor.preset(name)
+    assert drape_test(fabric, resolution=0.01).drape_coefficient == pytest.approx(
+        drape_test(fabric, resolution=0.0075).drape_coefficient, abs=0.02)
 
 
 def test_cli_drape_test_prints_json_and_draws_the_shadow(tmp_path, capsys):
@@ -116,15 +123,15 @@ def test_cli_kes_file_errors_name_the_file_and_the_field(tmp_path, capsys):
     assert "not JSON" in capsys.readouterr().err
 
 
-def _in_published_range(name):
+def _in_published_range(name, specimens=3):
     dc_lo, dc_hi, n_lo, n_hi = DRAPE_RANGES[name]
-    test = drape_test(tailor.preset(name))
+    test = drape_test(tailor.preset(name), specimens=specimens)
     assert dc_lo <= test.drape_coefficient <= dc_hi and n_lo <= test.nodes <= n_hi, (name, test.drape_coefficient, test.nodes)
 
 
 def test_garment_leather_folds_like_leather():
     # the stiff end folds: 3 to 6 nodes (it used to stay a flat disk, DC 0.99 and 0 nodes)
-    _in_published_range("leather")
+    _in_published_range("leather", specimens=1)
 
 
 @pytest.mark.slow

@@ -33,8 +33,10 @@ def test_sphere_quick_resolutions_agree_and_rest_on_the_sphere():
     assert r.min() > 0.045 - 0.001  # nothing inside the 9 cm sphere beyond a millimetre
 
 
+@pytest.mark.slow
 def test_sphere_21_against_31_converges():
-    # the issue's own check, in CI (~30 s): the full 2 s of settling at 11, 21 and 31
+    # the issue's own check (a minute): the full 2 s of settling at 11, 21 and 31; CI runs the quick
+    # version above
     runs = {n: _run_patch("sphere", bottino_fabric("A", "kes5"), n) for n in (11, 21, 31)}
     d21 = _shape_distance(runs[31][:2], runs[21][:2])
     assert d21 < _shape_distance(runs[31][:2], runs[11][:2])
@@ -61,7 +63,7 @@ def test_patch_meeting_a_cube_edge_lands_without_being_thrown_off():
 
 def test_drape_coefficient_grows_with_bending_and_lies_in_0_1():
     cotton = tailor.preset("cotton")
-    dc = [drape_test(cotton.with_values(bending=c), resolution=0.02).drape_coefficient for c in (1.0, 8.0, 60.0)]
+    dc = [drape_test(cotton.with_values(bending=c), resolution=0.02, specimens=1).drape_coefficient for c in (1.0, 8.0, 60.0)]
     assert 0.0 < dc[0] < dc[1] < dc[2] < 1.0
 
 

@@ -34,15 +34,16 @@ def _cmd_drape_test(args) -> int:
 
     _positive(args.resolution, "--resolution", "cm")
     fabric = _test_fabric(args)
-    test = drape_test(fabric, resolution=args.resolution * 1e-2)
+    test = drape_test(fabric, resolution=args.resolution * 1e-2, specimens=args.specimens)
     picture = Path(args.picture or f"out/drape_test_{fabric.name.split()[0]}.png")
     picture.parent.mkdir(parents=True, exist_ok=True)
     shadow_plot(picture, [test])
     if args.json:
         print(json.dumps({**test.as_dict(), "picture": str(picture)}, indent=2))
     else:
+        each = ", ".join(f"{dc:.3f}/{n}" for dc, n in test.specimens)
         print(f"{fabric.name}: drape coefficient {test.drape_coefficient:.3f}, {test.nodes} nodes "
-              f"({args.resolution:g} cm mesh, {test.wall_s:.1f} s); shadow: {picture}")
+              f"(specimens {each}; {args.resolution:g} cm mesh, {test.wall_s:.1f} s); shadow: {picture}")
     return 0
 
 
@@ -135,7 +136,7 @@ def _cmd_calibrate(args) -> int:
 def add_fabric_commands(sub) -> None:
     """fabric drape-test | cantilever-test | calibrate."""
     from ..fabric import fabric_names
-    from ..lab import DRAPE_RESOLUTION
+    from ..lab import DRAPE_RESOLUTION, SPECIMEN_SCALES
 
     f = sub.add_parser("fabric", help="fabric tests (Cusick drape, cantilever) simulated, and calibration from measurements")
     fsub = f.add_subparsers(dest="fabric_command", required=True, metavar="TEST")
@@ -147,6 +148,8 @@ def add_fabric_commands(sub) -> None:
         fabric_options(p)
         p.add_argument("--json", action="store_true", help="machine-readable output")
     d.add_argument("--resolution", type=float, default=res, metavar="CM", help=f"element size (cm, default {res:g}: where the node count has converged)")
+    d.add_argument("--specimens", type=int, default=len(SPECIMEN_SCALES), choices=range(1, len(SPECIMEN_SCALES) + 1),
+                   help=f"specimens averaged, each a different triangulation (default {len(SPECIMEN_SCALES)})")
     d.add_argument("--picture", metavar="PNG", help="the shadow picture (default out/drape_test_NAME.png)")
     d.set_defaults(func=_cmd_drape_test)
     c.add_argument("--direction", default="warp", choices=["warp", "weft"], help="the strip's length along (default warp)")
