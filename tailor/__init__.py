@@ -28,6 +28,7 @@ from .io.preview import PreviewSettings, preview
 from .measure import Landmark, find_landmarks, measure_body
 from .mesh import GarmentMesh, discretise
 from .model import Model, State, build_model
+from .outfit import outfit
 from .pattern import Pattern, validate_pattern
 from .sim import simulate
 from .sizing import check_loops, grade
@@ -65,6 +66,7 @@ __all__ = [
     "grade",
     "FitError",
     "drape",
+    "outfit",
     "DrapeResult",
     "DrapeOptions",
     "DrapeReport",

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .collide import body_gap
 from .errors import BodyError, TailorError
 from .geometry import face_areas
 
@@ -39,10 +40,6 @@ __all__ = ["FitMap", "FitSource", "Ease", "fit_map", "fit_section", "face_stretc
 
 EASE_LANDMARKS = ("bust", "waist", "hips", "left_upper_arm", "right_upper_arm", "left_thigh", "right_thigh")
 """Landmarks whose ease a fit map reports (where the garment covers them)."""
-
-GAP_REACH = (0.03, 0.15)
-"""Radii [m] within which the body's nearest point is searched exactly, in turn; beyond the last
-a vertex's gap is its distance to the nearest body vertex."""
 
 EASE_REACH = 0.15
 """Garment cut points farther than this [m] from the landmark's outline are not round it."""
@@ -265,31 +262,6 @@ def vertex_areas(x, faces, n: int) -> np.ndarray:
 def _pressure(normal_force, x, faces) -> np.ndarray:
     """Pressure [kPa] of a normal force per vertex [N] over the vertex's share of the area at ``x``."""
     return normal_force / np.maximum(vertex_areas(x, faces, len(x)), 1e-12) * 1e-3
-
-
-def body_gap(x, body_x, body_faces):
-    """Signed distance [m] from each point to the body surface (negative inside) and the body's
-    outward normal at its nearest point; exact within the last of :data:`GAP_REACH`."""
-    from scipy.spatial import cKDTree
-
-    from .collide import BodyCollider
-
-    x = np.asarray(x, float)
-    dist, normal = np.full(len(x), np.inf), np.zeros((len(x), 3))
-    todo = np.arange(len(x))
-    for reach in GAP_REACH:
-        if not len(todo):
-            break
-        collider = BodyCollider(np.asarray(body_x, float)[None], body_faces, margin=reach)
-        d, tri, _, nrm = collider.nearest(x[todo], body_x, 0, cache=False)
-        found = tri >= 0
-        dist[todo[found]], normal[todo[found]] = d[found], nrm[found]
-        todo = todo[~found]
-    if len(todo):
-        d, k = cKDTree(body_x).query(x[todo])
-        dist[todo] = d
-        normal[todo] = (x[todo] - np.asarray(body_x)[k]) / np.maximum(d, 1e-12)[:, None]
-    return dist, normal
 
 
 def landmark_ease(garment, body_mesh, landmark) -> Ease | None:

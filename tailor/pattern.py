@@ -243,6 +243,22 @@ class Attachment:
 
 
 @dataclass(frozen=True, slots=True)
+class Piece:
+    """One garment of an outfit (:func:`tailor.outfit.outfit`): panels ``first`` to
+    ``first + count − 1`` of the outfit's pattern.
+
+    ``layer`` orders the garments (larger is further out); ``clearance`` [m] is what its placement
+    adds to its panels' own: the room the garments inside it take.
+    """
+
+    name: str
+    first: int
+    count: int
+    layer: int = 0
+    clearance: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
 class Pattern:
     """A garment pattern in SI units.
 
@@ -256,6 +272,10 @@ class Pattern:
         Default fabric of every panel without its own.
     source : str
         Where it came from (file name), prefixed to every message.
+    layer : int
+        Its place in an outfit (:mod:`tailor.outfit`): larger is further out; 0 by default.
+    pieces : tuple of Piece
+        The garments of an outfit, innermost first; empty for a single garment.
     """
 
     name: str
@@ -264,6 +284,8 @@ class Pattern:
     attachments: tuple[Attachment, ...] = ()
     fabric: Fabric | None = None
     source: str = "<pattern>"
+    layer: int = 0
+    pieces: tuple[Piece, ...] = ()
     _index: dict = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
@@ -276,6 +298,13 @@ class Pattern:
     def panel(self, name: str) -> Panel:
         """The panel called ``name``."""
         return self.panels[self._index[name]]
+
+    def piece_of(self, panel: int) -> Piece:
+        """The garment panel number ``panel`` belongs to (the whole pattern for a single garment)."""
+        for piece in self.pieces:
+            if piece.first <= panel < piece.first + piece.count:
+                return piece
+        return Piece(self.name, 0, len(self.panels), self.layer)
 
     @property
     def area(self) -> float:

@@ -127,6 +127,47 @@ def _clear_rigid(x, placement, inside, body_axis, clearance=0.01, reach=0.3):
     return x
 
 
+LAYER_CLEARANCE = 0.01
+"""Room [m] an outer garment's placed panels keep outside an inner garment's (beyond the test's probe)."""
+
+
+class _Outside:
+    """``inside(points)`` for an outer garment: inside the body (``body``), or behind or within
+    ``gap`` [m] of the garments already placed (panels before ``first``).
+
+    A point is behind the placed cloth when its nearest placed vertex, less than 30 cm away, lies
+    over it (within one and a half mesh edges sideways) and the point is less than ``gap`` out
+    along that vertex's outward normal (placed panels face out: counter-clockwise is outside).
+    """
+
+    def __init__(self, body, x, mesh, first: int, gap: float):
+        from scipy.spatial import cKDTree
+
+        self.body, self.gap, self.side = body, gap, 1.5 * mesh.resolution
+        keep = mesh.vertex_panel < first
+        faces = mesh.faces[keep[mesh.faces].all(axis=1)]
+        tri = x[faces]
+        fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        n = np.zeros_like(x)
+        for k in range(3):
+            np.add.at(n, faces[:, k], fn)
+        self.ids = np.flatnonzero(np.linalg.norm(n, axis=1) > 0)
+        self.x = x[self.ids].copy()
+        self.n = n[self.ids] / np.linalg.norm(n[self.ids], axis=1, keepdims=True)
+        self.tree = cKDTree(self.x)
+
+    def __call__(self, points):
+        points = np.asarray(points, float)
+        out = np.asarray(self.body(points), bool).copy()
+        d, k = self.tree.query(points, distance_upper_bound=0.3)
+        near = np.flatnonzero(np.isfinite(d))
+        rel = points[near] - self.x[k[near]]
+        along = np.einsum("ij,ij->i", rel, self.n[k[near]])
+        sideways = np.linalg.norm(rel - along[:, None] * self.n[k[near]], axis=1)
+        out[near] |= (along < self.gap) & (sideways < self.side)
+        return out
+
+
 def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
     """Initial 3D positions [m], shape (N, 3), of every mesh vertex from its panel's placement.
 
@@ -149,19 +190,23 @@ def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
     body_axis = np.zeros(2)
     if landmarks:
         body_axis = np.mean([np.asarray(lm.center)[:2] for lm in landmarks.values()], axis=0)
-    counts: dict = {}  # panels side by side around a landmark: distinct angles (bands stack vertically)
-    for p in pattern.panels:
+    pieces = [pattern.piece_of(pi) for pi in range(len(pattern.panels))]
+    counts: dict = {}  # a garment's panels side by side around a landmark: distinct angles (bands stack vertically)
+    for p, piece in zip(pattern.panels, pieces):
         if isinstance(p.placement, LandmarkPlacement):
-            counts.setdefault(p.placement.landmark, set()).add(round(p.placement.angle % (2 * math.pi), 6))
+            counts.setdefault((piece.name, p.placement.landmark), set()).add(round(p.placement.angle % (2 * math.pi), 6))
     counts = {k: len(v) for k, v in counts.items()}
     for pi, panel in enumerate(pattern.panels):
+        if pi and pieces[pi] != pieces[pi - 1] and inside is not None:  # an outer garment: clear of the inner ones too
+            inside = _Outside(inside, x, mesh, pieces[pi].first, LAYER_CLEARANCE)
         ids = mesh.panel_vertices(pi)
         uv = mesh.uv[ids]
         pl = panel.placement
         if pl is None:
             pattern.fail(panel.where(), "the panel has no placement (give 'placement' or 'translation'/'rotation')")
         if isinstance(pl, TransformPlacement):
-            x[ids] = pl.apply(uv) if inside is None else _clear_rigid(pl.apply(uv), pl, inside, body_axis)
+            x[ids] = pl.apply(uv) if inside is None else _clear_rigid(pl.apply(uv), pl, inside, body_axis,
+                                                                      clearance=0.01 + pieces[pi].clearance)
             continue
         if landmarks is None:
             raise PatternError(f"{pattern.source}: {panel.where()}.placement: a landmark placement needs a body")
@@ -169,7 +214,7 @@ def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
         lm = landmarks.get(name) or landmarks.get(pl.landmark)
         lo, hi = uv.min(axis=0), uv.max(axis=0)
         anchor = np.array(pl.anchor) if pl.anchor is not None else np.array([0.5 * (lo[0] + hi[0]), hi[1]])
-        share = 1.0 / counts[pl.landmark]
+        share = 1.0 / counts[(pieces[pi].name, pl.landmark)]
         x[ids] = _wrap(uv, anchor, lm, pl, share, inside)
     return x
 

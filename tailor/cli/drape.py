@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from ..errors import TailorError
+from ..outfit import outfit
 from .common import UP_CHOICES, _formats, _preview, preview_options
 from .fit import check_maximum, describe, fit_frames, make_fits
 from .pattern import _graded
@@ -39,13 +40,14 @@ def _cmd_drape(args) -> int:
         raise TailorError("--cuts/--tear change the garment's mesh during the run: only the OBJ sequence can hold "
                           "that (leave out --format, --preview and --fit)")
     check_maximum(args.fit_max)
-    pattern = read_pattern(args.pattern)
-    out = Path(args.out) if args.out else Path("out") / pattern.name
+    patterns = [read_pattern(path) for path in args.pattern]
+    out = Path(args.out) if args.out else Path("out") / "+".join(p.name for p in patterns)
     if out.exists() and not args.overwrite:
         raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
     body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base, fps=args.body_fps)
     if args.grade == "auto":
-        pattern, _ = _graded(pattern, body, args.design_body)
+        patterns = [_graded(p, body, args.design_body)[0] for p in patterns]
+    pattern = outfit(patterns)
     bars = PhaseBars(disable=args.quiet)
     t0 = time.perf_counter()
     try:
@@ -86,6 +88,9 @@ def _cmd_drape(args) -> int:
     warning = crossing_warning(r.crossings_per_frame, args.self_collision)
     if warning:
         print(warning, file=sys.stderr)
+    if max(r.out_of_layer_per_frame or [0]):
+        print(f"tailor: warning: garments out of their layer order: up to {max(r.out_of_layer_per_frame)} vertices "
+              f"inside a garment they should be over (report.json out_of_layer_per_frame)", file=sys.stderr)
     return 0
 
 
@@ -149,8 +154,9 @@ def add_drape_command(sub) -> None:
     from ..fabric import fabric_names
     from ..integrators import INTEGRATORS
 
-    d = sub.add_parser("drape", help="place, sew and drape a pattern on a body; writes an OBJ per frame")
-    d.add_argument("pattern", metavar="PATTERN")
+    d = sub.add_parser("drape", help="place, sew and drape a pattern (or an outfit of several) on a body; writes an OBJ per frame")
+    d.add_argument("pattern", metavar="PATTERN", nargs="+",
+                   help="pattern file; several dress an outfit, the first innermost (or by each file's \"layer\")")
     d.add_argument("--body", default="mannequin", help="mannequin (default), mannequin-walk, or a body file/folder")
     d.add_argument("--units", default="auto", choices=["auto", "m", "dm", "cm", "mm"])
     d.add_argument("--up", default="auto", choices=UP_CHOICES, help="the file's axis that points up (a negative one as --up=-y)")

@@ -16,7 +16,7 @@ a margin and reuse the candidates while nothing has moved further than it.
 * :mod:`.contacts` — :class:`Contacts`, what a response hands to the next implicit step.
 """
 
-from .body import BodyCollider
+from .body import BodyCollider, body_gap
 from .broad import TriangleBoxes, bvh_object, clustered_query, sphere_query
 from .cloth import SELF_COLLISION_MODES, SelfCollider
 from .contacts import NO_CONTACTS, Contacts
@@ -25,5 +25,5 @@ from .inside import InsideTest, points_inside
 from .intersect import self_intersections
 from .untangle import untangle
 
-__all__ = ["BodyCollider", "SelfCollider", "SELF_COLLISION_MODES", "bvh_object", "points_inside", "InsideTest",
+__all__ = ["BodyCollider", "body_gap", "SelfCollider", "SELF_COLLISION_MODES", "bvh_object", "points_inside", "InsideTest",
            "self_intersections", "edge_crossings", "untangle", "sphere_query", "clustered_query", "TriangleBoxes", "Contacts", "NO_CONTACTS"]

@@ -10,7 +10,7 @@ from .closest import nearest_into
 from .contacts import NO_CONTACTS, Contacts
 from .inside import points_inside
 
-__all__ = ["BodyCollider"]
+__all__ = ["BodyCollider", "body_gap", "GAP_REACH"]
 
 
 class BodyCollider:
@@ -271,3 +271,31 @@ class BodyCollider:
         mu = np.broadcast_to(mu, hit.shape)
         return Contacts(hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]), model.vertex_count,
                         stick=np.ones(int(rest.sum()), bool), body_velocity=vb[rest], friction=mu[rest])
+
+
+GAP_REACH = (0.03, 0.15)
+"""Radii [m] within which the body's nearest point is searched exactly, in turn; beyond the last
+a vertex's gap is its distance to the nearest body vertex."""
+
+
+def body_gap(x, body_x, body_faces):
+    """Signed distance [m] from each point to the body surface (negative inside) and the body's
+    outward normal at its nearest point; exact within the last of :data:`GAP_REACH`."""
+    from scipy.spatial import cKDTree
+
+    x = np.asarray(x, float)
+    dist, normal = np.full(len(x), np.inf), np.zeros((len(x), 3))
+    todo = np.arange(len(x))
+    for reach in GAP_REACH:
+        if not len(todo):
+            break
+        collider = BodyCollider(np.asarray(body_x, float)[None], body_faces, margin=reach)
+        d, tri, _, nrm = collider.nearest(x[todo], body_x, 0, cache=False)
+        found = tri >= 0
+        dist[todo[found]], normal[todo[found]] = d[found], nrm[found]
+        todo = todo[~found]
+    if len(todo):
+        d, k = cKDTree(body_x).query(x[todo])
+        dist[todo] = d
+        normal[todo] = (x[todo] - np.asarray(body_x)[k]) / np.maximum(d, 1e-12)[:, None]
+    return dist, normal

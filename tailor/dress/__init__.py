@@ -14,11 +14,14 @@ import math
 import time
 from dataclasses import replace
 
+import numpy as np
+
 from ..collide import BodyCollider, InsideTest, edge_crossings
 from ..contact import ContactPipeline, body_margin
 from ..integrators import make_integrator
 from ..measure import measure_body
 from ..mesh import discretise
+from ..outfit import garment_of_vertex, out_of_order, outfit
 from ..placement import limb_walls, place_panels
 from ..sim import quality as sim_quality
 from ..sizing import check_loops
@@ -39,7 +42,9 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
 
     Parameters
     ----------
-    pattern : Pattern
+    pattern : Pattern or list of Pattern
+        A list dresses an outfit: the garments together, innermost first or by their ``layer``
+        (:func:`tailor.outfit.outfit`).
     body : Body
         Static or moving (:func:`tailor.io.body_files.read_body`).
     fabric : Fabric or str, optional
@@ -72,19 +77,22 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
         An invalid option; seams that do not close within ``sew_timeout``; SimulationUnstable.
     """
     t_start = time.perf_counter()
+    if isinstance(pattern, (list, tuple)):
+        pattern = outfit(pattern)
     opts = options or DrapeOptions(fabric=fabric, **kwargs)
     if options is not None and (fabric is not None or kwargs):
         opts = replace(options, **kwargs, **({"fabric": fabric} if fabric is not None else {}))
     d, loops, x0 = prepare(pattern, body, opts, on_frame, progress)
     report = _header(d, pattern, body, loops, opts)
     report.placement_crossings = _placement_crossings(x0, d.garment.mesh, pattern)
+    report.garments = _garments(pattern, d.garment.mesh)
     state, report.phases["sewing"] = sew(d, x0)
     state, report.phases["settling"] = settle(d, state)
     state, phase = transition(d, state)
     if phase is not None:
         report.phases["transition"] = phase
     state, report.phases["motion"], report.max_penetration_m_per_frame, report.crossings_per_frame = animate(d, state)
-    _close(report, d, t_start)
+    _close(report, d, t_start, body)
     return DrapeResult(d.frames, d.body_frames, *d.first_topology, body.faces, pattern, report, topology=d.topology,
                        contact_forces=[c for c, _ in d.loads], attachment_forces=[a for _, a in d.loads])
 
@@ -113,6 +121,20 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
                                self_collision=opts.self_collision)
     d = Dressing(opts, garment, timeline, contacts, integ, q, walls=walls, on_frame=on_frame, progress=progress)
     return d, loops, x0
+
+
+def _garments(pattern, mesh) -> dict | None:
+    """An outfit's section per garment for the report (None for a single garment)."""
+    if not pattern.pieces:
+        return None
+    out = {}
+    for piece in pattern.pieces:
+        ids = range(piece.first, piece.first + piece.count)
+        out[piece.name] = {"layer": piece.layer, "panels": [pattern.panels[i].name for i in ids],
+                           "vertices": int(np.isin(mesh.vertex_panel, ids).sum()),
+                           "faces": int(np.isin(mesh.face_panel, ids).sum()),
+                           "placement_clearance_added_m": round(piece.clearance, 6)}
+    return out
 
 
 def _placement_crossings(x0, mesh, pattern) -> int:
@@ -154,9 +176,20 @@ def _header(d: Dressing, pattern, body, loops, opts: DrapeOptions) -> DrapeRepor
         ) if cond])
 
 
-def _close(report: DrapeReport, d: Dressing, t_start: float) -> None:
+def _out_of_layer(d: Dressing, body) -> list | None:
+    """Per frame, an outfit's vertices found inside a garment they should be over (None: one garment,
+    or a mesh cut during the run)."""
+    pattern, mesh = d.garment.pattern, d.garment.mesh
+    if not pattern.pieces or d.topology:
+        return None
+    garment = garment_of_vertex(pattern, mesh.vertex_panel)
+    return [int(out_of_order(x, garment, bx, body.faces).sum()) for x, bx in zip(d.frames, d.body_frames)]
+
+
+def _close(report: DrapeReport, d: Dressing, t_start: float, body) -> None:
     """The report's totals once the last frame is out."""
     counters = d.integrator.counters
+    report.out_of_layer_per_frame = _out_of_layer(d, body)
     pen = report.max_penetration_m_per_frame
     report.max_penetration_m = max(pen) if pen else 0.0
     report.wall_s = time.perf_counter() - t_start

@@ -88,6 +88,8 @@ class DrapeReport:
     self_collision: dict = field(default_factory=dict)
     tearing: dict | None = None
     fit: dict | None = None  # tailor.fit.fit_section of the frames mapped (tailor drape --fit)
+    garments: dict | None = None  # an outfit's garments, innermost first: name → {"layer", "panels", "vertices", ...}
+    out_of_layer_per_frame: list | None = None  # an outfit's vertices inside a garment they should be over (tailor.outfit.out_of_order)
 
     def to_json(self) -> dict:
         """The report as report.json holds it (plain numbers, lists and dicts)."""

@@ -21,7 +21,7 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
     """Write ``result`` (:class:`tailor.dress.DrapeResult`) into ``out_dir``.
 
     Files: ``garment_0000.obj`` … (``v`` welded so a seam is one vertex, ``vt`` the flat pattern in
-    metres, one ``g`` per panel), ``garment.mtl``, optionally ``body_0000.obj`` …, ``loads.npz``
+    metres, one ``g`` per panel; an outfit's garments one ``o`` each, panels ``GARMENT/PANEL``), ``garment.mtl``, optionally ``body_0000.obj`` …, ``loads.npz``
     (per frame the body's contact and the attachments' forces on each OBJ vertex, N:
     ``contact_0000``, ``attachment_0000`` …, what :mod:`tailor.fit` reads) and ``report.json``. A garment cut or torn during the run is written with each frame's own mesh.
     Everything is written into a temporary folder beside ``out_dir`` and renamed
@@ -34,12 +34,14 @@ def write_drape(result, out_dir, *, overwrite: bool = False, with_body: bool = F
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
         names = result.mesh.panel_names
+        pieces = result.pattern.pieces
+        objects = [result.pattern.piece_of(i).name for i in range(len(names))] if pieces else None
         (tmp / "garment.mtl").write_text(mtl_text(names))
         for k, x in enumerate(result.frames):
             mesh, weld = result.topology_at(k)  # a cut or a tear changes the mesh from its frame on
             xw, faces = welded(weld, mesh.faces, x)
             text = obj_text(xw, faces, uv=mesh.uv, face_uv=mesh.faces, face_group=mesh.face_panel, group_names=names,
-                            mtl="garment.mtl", header=f"tailor drape of {result.pattern.name}, frame {k}")
+                            group_objects=objects, mtl="garment.mtl", header=f"tailor drape of {result.pattern.name}, frame {k}")
             (tmp / f"garment_{k:04d}.obj").write_text(text)
             if with_body:
                 (tmp / f"body_{k:04d}.obj").write_text(obj_text(result.body_frames[k], result.body_faces))

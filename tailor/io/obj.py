@@ -19,7 +19,8 @@ from .atomic import atomic_write
 __all__ = ["write_obj", "obj_text", "read_obj", "read_obj_vertices", "ObjMesh"]
 
 
-def obj_text(x, faces, *, uv=None, face_uv=None, face_group=None, group_names=None, mtl=None, header="") -> str:
+def obj_text(x, faces, *, uv=None, face_uv=None, face_group=None, group_names=None, group_objects=None, mtl=None,
+             header="") -> str:
     """The OBJ text of a mesh.
 
     Parameters
@@ -34,6 +35,8 @@ def obj_text(x, faces, *, uv=None, face_uv=None, face_group=None, group_names=No
         UV index per face corner; defaults to ``faces`` (one uv per vertex).
     face_group, group_names : optional
         Group index per face and the group names (one ``g`` per group).
+    group_objects : sequence of str, optional
+        The object each group belongs to (an outfit's garment): an ``o`` line starts each.
     """
     x = np.asarray(x, dtype=float)
     faces = np.asarray(faces)
@@ -57,9 +60,13 @@ def obj_text(x, faces, *, uv=None, face_uv=None, face_group=None, group_names=No
         np.savetxt(out, corners, fmt=fmt)
     else:
         face_group = np.asarray(face_group)
+        current = None
         for gi, name in enumerate(group_names):
             sel = face_group == gi
             if sel.any():
+                if group_objects is not None and group_objects[gi] != current:
+                    current = group_objects[gi]
+                    out.write(f"o {current}\n")
                 out.write(f"g {name}\n")
                 if mtl:
                     out.write(f"usemtl {name}\n")

@@ -48,7 +48,7 @@ __all__ = ["read_pattern", "pattern_from_dict", "reshaped_document", "GARMENTCOD
 GARMENTCODE_TO_TAILOR = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 """Maps GarmentCode's world (Y up, facing +Z) to tailor's (Z up, facing −Y): (x, y, z) → (x, −z, y)."""
 
-_TOP = {"pattern", "properties", "parameters", "parameter_order", "fabric", "name", "description"}
+_TOP = {"pattern", "properties", "parameters", "parameter_order", "fabric", "name", "description", "layer"}
 _PATTERN = {"panels", "stitches", "panel_order", "attachments"}
 _PROPERTIES = {"units_in_meter", "curvature_coords", "normalize_panel_translation", "normalized_edge_loops"}
 _PANEL = {"vertices", "edges", "translation", "rotation", "label", "holes", "grain", "fabric", "placement", "marks"}
@@ -122,6 +122,7 @@ def pattern_from_dict(doc, *, source: str = "<pattern>", name: str | None = None
     if root.has("name"):
         name = root.key("name").as_str()
     fabric = _fabric(root.key("fabric", DEFAULT_FABRIC))
+    layer = root.key("layer").as_int(what="layer") if root.has("layer") else 0
 
     pat = root.key("pattern")
     pat.as_object(_PATTERN)
@@ -140,6 +141,7 @@ def pattern_from_dict(doc, *, source: str = "<pattern>", name: str | None = None
         attachments=attachments,
         fabric=fabric,
         source=source,
+        layer=layer,
     )
     return validate_pattern(pattern) if validate else pattern
 

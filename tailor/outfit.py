@@ -1,0 +1,128 @@
+"""Outfits: several garments dressed together, layered, on one body.
+
+People dress in outfits: a top over trousers, a skirt over a petticoat. CLO gives each pattern a
+layer number (larger is further out) and 3ds Max's cloth pushes a higher layer outside a lower one;
+GarmentCode merges an upper and a lower garment into one mesh. tailor does the last, keeping the
+garments apart: :func:`outfit` makes one :class:`~tailor.pattern.Pattern` of several, its panels
+named ``GARMENT/PANEL`` and its :attr:`~tailor.pattern.Pattern.pieces` saying which garment each
+panel belongs to, so the whole driver (placement, sewing, contact, output) handles an outfit as it
+handles one garment:
+
+* **Order.** Garments go innermost first: by their pattern's ``layer`` (0 unless the file gives
+  one), ties in the order given.
+* **Placement.** Each garment is placed clear of the ones inside it: its own clearance plus theirs
+  and :data:`LAYER_GAP` (:class:`~tailor.pattern.Piece` ``clearance``, which
+  :func:`tailor.placement.place_panels` adds to every panel of the garment).
+* **Sewing.** Every garment sews at once; each panel keeps its own garment's fabric.
+* **Contact between garments** is self-contact of the outfit's one mesh: perfectly inelastic
+  (Carignan Eq. 5–8), over the same broad and narrow phases (:mod:`tailor.collide.cloth`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .errors import PatternError
+from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSide, validate_pattern
+
+__all__ = ["outfit", "LAYER_GAP", "garment_of_vertex", "out_of_order"]
+
+LAYER_GAP = 0.01
+"""Room [m] left between a garment's placement and the one inside it, beyond that one's clearance."""
+
+
+def outfit(patterns, *, name: str | None = None) -> Pattern:
+    """One pattern dressing ``patterns`` together, innermost first (see the module).
+
+    A single pattern is returned as it is. Garments with one name are told apart as ``NAME``,
+    ``NAME-2`` …. Raises PatternError for an empty list.
+    """
+    patterns = list(patterns)
+    if not patterns:
+        raise PatternError("an outfit needs at least one pattern")
+    if len(patterns) == 1:
+        return patterns[0]
+    order = sorted(range(len(patterns)), key=lambda i: (patterns[i].layer, i))
+    names = _unique([patterns[i].name for i in order])
+    panels, seams, attachments, pieces = [], [], [], []
+    room = 0.0  # how far out the garments placed so far reach
+    for garment, i in zip(names, order):
+        p = patterns[i]
+        extra = room + LAYER_GAP if pieces else 0.0
+        pieces.append(Piece(garment, len(panels), len(p.panels), p.layer, extra))
+        panels += [replace(q, name=f"{garment}/{q.name}", fabric=q.fabric or p.fabric, placement=_outward(q.placement, extra))
+                   for q in p.panels]
+        seams += [_renamed_seam(s, garment, len(seams) + k) for k, s in enumerate(p.seams)]
+        attachments += [_renamed_attachment(a, garment, len(attachments) + k) for k, a in enumerate(p.attachments)]
+        room = extra + max((q.placement.clearance for q in p.panels if isinstance(q.placement, LandmarkPlacement)),
+                           default=0.02)
+    first = patterns[order[0]]
+    combined = Pattern(name=name or "+".join(names), panels=tuple(panels), seams=tuple(seams),
+                       attachments=tuple(attachments), fabric=first.fabric,
+                       source=" + ".join(patterns[i].source for i in order), pieces=tuple(pieces))
+    return validate_pattern(combined)
+
+
+def _unique(names):
+    """``names`` with repeats numbered: a, a-2, a-3."""
+    seen: dict = {}
+    out = []
+    for n in names:
+        seen[n] = seen.get(n, 0) + 1
+        out.append(n if seen[n] == 1 else f"{n}-{seen[n]}")
+    return out
+
+
+def _outward(placement, extra: float):
+    """A landmark placement ``extra`` [m] further from the body (a rigid one is cleared by
+    :func:`tailor.placement.place_panels`, which knows the body)."""
+    if isinstance(placement, LandmarkPlacement) and extra:
+        return replace(placement, clearance=placement.clearance + extra)
+    return placement
+
+
+def _renamed_side(side: SeamSide, garment: str) -> SeamSide:
+    return replace(side, panel=f"{garment}/{side.panel}")
+
+
+def _renamed_seam(seam: Seam, garment: str, index: int) -> Seam:
+    return replace(seam, a=_renamed_side(seam.a, garment), b=_renamed_side(seam.b, garment), index=index)
+
+
+def _renamed_attachment(a: Attachment, garment: str, index: int) -> Attachment:
+    return replace(a, panel=f"{garment}/{a.panel}", index=index)
+
+
+def garment_of_vertex(pattern: Pattern, vertex_panel) -> np.ndarray:
+    """(N,) index into ``pattern.pieces`` of each vertex's garment, from its panel."""
+    out = np.zeros(len(vertex_panel), np.intp)
+    for k, piece in enumerate(pattern.pieces):
+        out[(vertex_panel >= piece.first) & (vertex_panel < piece.first + piece.count)] = k
+    return out
+
+
+def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02) -> np.ndarray:
+    """(G, G) counts: entry (i, j), i < j, is how many of garment j's vertices lie within ``reach``
+    [m] of garment i's and nearer the body than the nearest of them — an outer garment's cloth
+    inside an inner one's. All zero when every garment keeps its layer. ``garment`` is
+    :func:`garment_of_vertex`; distances to the body are :func:`tailor.collide.body_gap`'s.
+    """
+    from scipy.spatial import cKDTree
+
+    from .collide import body_gap
+
+    x = np.asarray(x, float)
+    gap = body_gap(x, body_x, body_faces)[0]
+    count = int(garment.max(initial=0)) + 1
+    out = np.zeros((count, count), np.intp)
+    for i in range(count):
+        inner = np.flatnonzero(garment == i)
+        tree = cKDTree(x[inner])
+        for j in range(i + 1, count):
+            outer = np.flatnonzero(garment == j)
+            d, k = tree.query(x[outer], distance_upper_bound=reach)
+            near = np.isfinite(d)
+            out[i, j] = int(np.count_nonzero(gap[outer[near]] < gap[inner[k[near]]]))
+    return out
