@@ -3,9 +3,18 @@
 from __future__ import annotations
 
 import copy
+import os
 from pathlib import Path
 
 import pytest
+
+if "PYTEST_XDIST_WORKER_COUNT" in os.environ:
+    # one numba thread per test worker when the workers fill the cores (as `tailor batch` does); set
+    # before anything imports numba. Passive waiting: GNU OpenMP's spinning threads would steal the
+    # other worker's core.
+    _threads = max(1, (os.cpu_count() or 1) // int(os.environ["PYTEST_XDIST_WORKER_COUNT"]))
+    os.environ.setdefault("NUMBA_NUM_THREADS", str(_threads))
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 ROOT = Path(__file__).resolve().parents[1]
 PANELS = ROOT / "panels"
