@@ -37,6 +37,8 @@ class Sewing:
     merged : (S,) bool
     max_gap_at_merge : float
         Widest gap [m] any pair had when it was merged.
+    active : (S,) bool
+        The pairs sewing now (an outfit sews one garment at a time: :meth:`sew_only`); all at first.
     """
 
     pairs: np.ndarray
@@ -45,17 +47,29 @@ class Sewing:
     merge_distance: float = 0.004
     merged: np.ndarray = field(default=None)
     max_gap_at_merge: float = 0.0
+    active: np.ndarray = field(default=None)
 
     def __post_init__(self):
         pairs = np.asarray(self.pairs, dtype=np.intp).reshape(-1, 2)
-        self.pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+        keep = pairs[:, 0] != pairs[:, 1]
+        self.pairs = pairs[keep]
         if self.merged is None:
             self.merged = np.zeros(len(self.pairs), bool)
+        self.active = np.ones(len(self.pairs), bool) if self.active is None else np.asarray(self.active, bool)[keep]
 
     @property
     def open_count(self) -> int:
         """Pairs not yet merged."""
         return int((~self.merged).sum())
+
+    @property
+    def sewing_count(self) -> int:
+        """Pairs sewing now and not yet merged."""
+        return int((~self.merged & self.active).sum())
+
+    def sew_only(self, active) -> None:
+        """From now on only the pairs where ``active`` (S,) is true pull and merge."""
+        self.active = np.asarray(active, bool).copy()
 
     def gaps(self, x) -> np.ndarray:
         """Distance of every pair [m] at unwelded positions ``x``, shape (S,)."""
@@ -73,8 +87,9 @@ class Sewing:
         return index[labels]
 
     def forces(self, model, state, weld, out):
-        """Add Eq. 15 forces of the open pairs into ``out`` [N] (welded model and state)."""
-        i, j = weld[self.pairs[~self.merged, 0]], weld[self.pairs[~self.merged, 1]]
+        """Add Eq. 15 forces of the open pairs sewing now into ``out`` [N] (welded model and state)."""
+        now = ~self.merged & self.active
+        i, j = weld[self.pairs[now, 0]], weld[self.pairs[now, 1]]
         keep = i != j
         i, j = i[keep], j[keep]
         if not len(i):
@@ -91,8 +106,8 @@ class Sewing:
         return out
 
     def open_pairs(self, weld) -> np.ndarray:
-        """Open pairs in welded indices (a pair already joined through others is dropped), (P, 2)."""
-        p = weld[self.pairs[~self.merged]]
+        """Open pairs sewing now, in welded indices (a pair already joined through others is dropped), (P, 2)."""
+        p = weld[self.pairs[~self.merged & self.active]]
         return p[p[:, 0] != p[:, 1]]
 
     def near_stiffness(self, x, pairs, mass, *, near: float, rate: float):
@@ -109,8 +124,8 @@ class Sewing:
         return k, 2.0 * np.sqrt(k * m)
 
     def close(self, x) -> int:
-        """Mark the open pairs closer than d (Eq. 16) at unwelded positions ``x``; return how many."""
-        open_ = np.flatnonzero(~self.merged)
+        """Mark the open pairs sewing now closer than d (Eq. 16) at unwelded positions ``x``; return how many."""
+        open_ = np.flatnonzero(~self.merged & self.active)
         if not len(open_):
             return 0
         gap = self.gaps(x)[open_]

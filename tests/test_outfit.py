@@ -78,7 +78,7 @@ def test_outer_garments_are_placed_outside_the_inner_ones():
 def outfit_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("outfit") / "run"
     argv = ["-q", "drape", str(PANELS / "trousers.json"), str(PANELS / "tshirt.json"), "--body", "mannequin-walk",
-            "--frames", "3", "--resolution", "4", "--with-body", "--out", str(out)]
+            "--frames", "2", "--resolution", "4", "--with-body", "--out", str(out)]
     assert main(argv) == 0
     return out
 
@@ -87,16 +87,16 @@ def test_a_walking_outfit_keeps_its_layers_without_crossings(outfit_run):
     report = json.loads((outfit_run / "report.json").read_text())
     assert list(report["garments"]) == ["trousers", "tshirt"]
     assert max(report["crossings_per_frame"]) == 0 and report["max_penetration_m"] <= 0.001
-    assert report["out_of_layer_per_frame"] == [0, 0, 0]
+    assert report["out_of_layer_per_frame"] == [0, 0]
     # checked again from the files: at the overlap every T-shirt vertex is farther from the body
     # than the nearest trouser vertex
-    mesh = read_obj(outfit_run / "garment_0002.obj")
+    mesh = read_obj(outfit_run / "garment_0001.obj")
     tshirt_groups = [g.startswith("tshirt/") for g in mesh.group_names]
     faces_tshirt = np.asarray(tshirt_groups)[mesh.face_group]
     garment = np.zeros(len(mesh.vertices), np.intp)
     garment[np.unique(mesh.faces[faces_tshirt])] = 1
-    body = read_obj(outfit_run / "body_0002.obj")
-    order = out_of_order(read_obj_vertices(outfit_run / "garment_0002.obj"), garment, body.vertices, body.faces)
+    body = read_obj(outfit_run / "body_0001.obj")
+    order = out_of_order(read_obj_vertices(outfit_run / "garment_0001.obj"), garment, body.vertices, body.faces)
     assert order[0, 1] == 0 and np.count_nonzero(garment) > 500
 
 

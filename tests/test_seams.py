@@ -53,3 +53,23 @@ def test_stiff_pair_springs_close_a_gap_stably_under_the_implicit_solver():
         state = integ.step(stiff, state, 0.01, total_forces).state
         gaps.append(np.linalg.norm(state.x[pairs[:, 0]] - state.x[pairs[:, 1]], axis=1).max())
     assert np.isfinite(state.x).all() and gaps[-1] < 0.01 * 0.2 and gaps[-1] <= gaps[0]
+
+
+def test_only_the_pairs_sewing_now_pull_and_merge():
+    # an outfit sews one garment at a time: the others' pairs neither pull nor merge until their turn
+    from types import SimpleNamespace
+
+    from tailor.model import State
+
+    x = np.array([[0.0, 0, 0], [0.001, 0, 0], [1.0, 0, 0], [1.001, 0, 0]])
+    sewing = Sewing(np.array([[0, 1], [2, 3], [2, 2]]), active=[True, False, True])
+    assert sewing.active.tolist() == [True, False] and sewing.sewing_count == 1 and sewing.open_count == 2
+    weld = np.arange(4)
+    model = SimpleNamespace(vertex_mass=np.ones(4))
+    f = sewing.forces(model, State(x + [[0, 0.01, 0]] * np.array([[0], [1], [0], [1]]), np.zeros((4, 3)), 0.0), weld,
+                      np.zeros((4, 3)))
+    assert np.abs(f[:2]).max() > 0 and not f[2:].any()
+    assert sewing.open_pairs(weld).tolist() == [[0, 1]]
+    assert sewing.close(x) == 1 and sewing.merged.tolist() == [True, False]  # pair 2–3 is as close, but waits
+    sewing.sew_only([False, True])
+    assert sewing.close(x) == 1 and sewing.open_count == 0

@@ -15,6 +15,7 @@ import numpy as np
 from ..contact import Attachments
 from ..forces import total_forces
 from ..model import AIR_DENSITY, build_model
+from ..outfit import garment_of_vertex
 from ..seams import Sewing, merge_state
 from ..tearing import TearableCloth
 from ..units import GRAVITY
@@ -58,6 +59,7 @@ class Garment:
         self.weld = np.arange(mesh.vertex_count)
         self.friction = self._panel_friction[mesh.vertex_panel]
         self.pins = np.zeros(0, np.intp)  # mesh vertices held to the body
+        self.waiting = np.zeros(0, np.intp)  # mesh vertices of an outfit's garments not sewing yet, held where placed
         self.gravity = False
         self.rebuilds = 0
         self.cloth: TearableCloth | None = None
@@ -93,8 +95,9 @@ class Garment:
         xw, vw = merge_state(x_orig, v_orig, self.mass, new)
         m = build_model(self.mesh, self.fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
                         gravity=(0.0, 0.0, -GRAVITY if self.gravity else 0.0))
-        if len(self.pins):
-            m = m.with_pins(np.unique(new[self.pins]))
+        held = np.union1d(self.pins, self.waiting)
+        if len(held):
+            m = m.with_pins(np.unique(new[held]))
         if self.sewing.open_count:
             pairs = self.sewing.open_pairs(new)
             m = m.with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
@@ -104,6 +107,22 @@ class Garment:
         out = m.state(xw, vw, 0.0)
         out.t = state.t
         return out
+
+    @property
+    def stages(self) -> int:
+        """Sewing stages: an outfit sews one garment at a time, innermost first; one garment, once."""
+        return max(1, len(self.pattern.pieces))
+
+    def sew_stage(self, state, k: int):
+        """Begin sewing stage ``k`` of :attr:`stages`: only garment ``k``'s seams pull and merge, the
+        garments outside it wait where they were placed (pinned), those inside are sewn. Returns the
+        state of the rebuilt model."""
+        if not self.pattern.pieces:
+            return state
+        garment = garment_of_vertex(self.pattern, self.mesh.vertex_panel)
+        self.sewing.sew_only(garment[self.sewing.pairs[:, 0]] == k)
+        self.waiting = np.flatnonzero(garment > k)
+        return self.rebuild(state)
 
     def attach(self, state, collider, pose):
         """Gravity on, the pattern's attachments pinned where they lie on the body (Eq. 19–20).

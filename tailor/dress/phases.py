@@ -127,37 +127,51 @@ def _widen_merging(sewing, t: float, options: DrapeOptions) -> None:
     time-out), then the last few pairs caught on the body (¾ of it, :data:`~.options.STRAGGLERS`)."""
     if t >= 0.5 * options.sew_timeout:
         sewing.merge_distance = max(sewing.merge_distance, 0.6 * options.resolution)
-    if t >= 0.75 * options.sew_timeout and sewing.open_count <= max(MIN_STRAGGLERS, STRAGGLERS * len(sewing.pairs)):
+    stragglers = max(MIN_STRAGGLERS, STRAGGLERS * int(sewing.active.sum()))
+    if t >= 0.75 * options.sew_timeout and sewing.sewing_count <= stragglers:
         sewing.merge_distance = max(sewing.merge_distance, STRAGGLER_REACH * options.resolution)
 
 
 def sew(d: Dressing, x0):
-    """Phase 1: the placed panels at ``x0`` sewn, one frame at a time, welding what closed."""
+    """Phase 1: the placed panels at ``x0`` sewn, one frame at a time, welding what closed.
+
+    An outfit sews in stages, innermost garment first, each given the whole ``sew_timeout``: the
+    garments outside wait where they were placed while the one inside closes, so no garment is
+    drawn in through another (:meth:`Garment.sew_stage`)."""
     t0 = time.perf_counter()
     d.enter(SEWING)
     g, sewing = d.garment, d.garment.sewing
     state = g.model.state(x0)
-    frames, t = 0, 0.0
-    while sewing.open_count and t < d.options.sew_timeout:
-        state = d.advance(state, d.frame_dt)
-        t += d.frame_dt
-        frames += 1
-        _widen_merging(sewing, t, d.options)
-        if sewing.close(g.frame(state)):
-            state = d.weld(state)
-        if d.options.record_sewing:
-            d.emit(state, d.timeline.pose)
-        d.tell(len(sewing.pairs) - sewing.open_count, len(sewing.pairs), state)
-    if sewing.open_count:
-        raise SimulationError(_open_seams(g, state, d.options.sew_timeout))
-    return state, PhaseReport(t, time.perf_counter() - t0, frames,
+    frames, total = 0, 0.0
+    merge_distance = sewing.merge_distance
+    for k in range(g.stages):
+        if g.stages > 1:
+            state = g.sew_stage(state, k)
+            sewing.merge_distance = merge_distance
+            d.contacts.follow(g.friction)
+            d.constrain()
+        t = 0.0
+        while sewing.sewing_count and t < d.options.sew_timeout:
+            state = d.advance(state, d.frame_dt)
+            t += d.frame_dt
+            frames += 1
+            _widen_merging(sewing, t, d.options)
+            if sewing.close(g.frame(state)):
+                state = d.weld(state)
+            if d.options.record_sewing:
+                d.emit(state, d.timeline.pose)
+            d.tell(len(sewing.pairs) - sewing.open_count, len(sewing.pairs), state)
+        total += t
+        if sewing.sewing_count:
+            raise SimulationError(_open_seams(g, state, d.options.sew_timeout))
+    return state, PhaseReport(total, time.perf_counter() - t0, frames,
                               {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds})
 
 
 def _open_seams(garment, state, timeout: float) -> str:
     """The sewing time-out's message: the stitch with the widest open gap."""
     sewing, pattern = garment.sewing, garment.pattern
-    gaps = np.where(sewing.merged, 0.0, sewing.gaps(garment.frame(state)))
+    gaps = np.where(sewing.merged | ~sewing.active, 0.0, sewing.gaps(garment.frame(state)))
     w = int(np.argmax(gaps))
     seam = pattern.seams[garment.mesh.seam_pair_seam[w]]
 
