@@ -64,8 +64,8 @@ class Job:
 
     Attributes
     ----------
-    pattern : str
-        Pattern file (absolute once read from a job file).
+    pattern : str or tuple of str
+        Pattern file (absolute once read from a job file); several dress an outfit (:mod:`tailor.outfit`).
     body : str
         A named body (``mannequin``, ``mannequin-walk``) or a body file/folder.
     fabric : str
@@ -74,7 +74,7 @@ class Job:
         Keys of :data:`OPTIONS` that differ from :data:`DEFAULTS`.
     """
 
-    pattern: str
+    pattern: str | tuple
     body: str = "mannequin"
     fabric: str = ""
     options: dict = field(default_factory=dict)
@@ -86,9 +86,14 @@ class Job:
         shaping = sorted((k, v) for k, v in self.options.items() if k != "timeout")
         key = json.dumps([self.pattern, self.body, self.fabric, shaping], sort_keys=True)
         digest = hashlib.sha1(key.encode()).hexdigest()[:8]
-        parts = [Path(self.pattern).stem, Path(self.body).stem if self.body not in ("mannequin", "mannequin-walk")
+        parts = ["+".join(Path(p).stem for p in self.patterns), Path(self.body).stem if self.body not in ("mannequin", "mannequin-walk")
                  else self.body, self.fabric or "own"]
-        return re.sub(r"[^A-Za-z0-9_.-]+", "_", "-".join(parts)) + "-" + digest
+        return re.sub(r"[^A-Za-z0-9_.+-]+", "_", "-".join(parts)) + "-" + digest
+
+    @property
+    def patterns(self) -> tuple:
+        """The job's pattern files (one, or an outfit's)."""
+        return (self.pattern,) if isinstance(self.pattern, str) else tuple(self.pattern)
 
     def option(self, name: str):
         """The job's value of option ``name`` (its own, else the default)."""
@@ -122,14 +127,17 @@ def _job(entry: dict, base: Path, source: str, where: str, defaults: dict) -> Jo
                           f"use pattern, body, fabric, {', '.join(OPTIONS)}")
     if "pattern" not in entry:
         raise TailorError(f"{source}: {where}.pattern: missing")
-    pattern = Path(str(entry["pattern"]))
-    pattern = pattern if pattern.is_absolute() else base / pattern
+    given = entry["pattern"]
+    if isinstance(given, list) and not given:
+        raise TailorError(f"{source}: {where}.pattern: an empty list (give a file, or a list of files for an outfit)")
+    files = [Path(str(f)) for f in (given if isinstance(given, list) else [given])]
+    files = [str((f if f.is_absolute() else base / f).resolve()) for f in files]
     body = str(entry.get("body") or "mannequin")
     if body not in ("mannequin", "mannequin-walk") and not Path(body).is_absolute():
         body = str(base / body)
     options = {k: _coerce(k, v, f"{source}: {where}.{k}") for k, v in entry.items() if k in OPTIONS}
     options = {k: v for k, v in options.items() if v != DEFAULTS[k]}
-    return Job(str(pattern.resolve()), body, str(entry.get("fabric") or ""), options)
+    return Job(files[0] if len(files) == 1 else tuple(files), body, str(entry.get("fabric") or ""), options)
 
 
 def _grid(grid: dict, base: Path, source: str, defaults: dict) -> list[Job]:
@@ -210,7 +218,7 @@ def _body(source: str):
 
 def _row(job: Job, status: str, **fields) -> dict:
     """A manifest row of ``job``: its inputs, ``status`` and ``fields``."""
-    return {"id": job.id, "status": status, "pattern": job.pattern, "body": job.body, "fabric": job.fabric,
+    return {"id": job.id, "status": status, "pattern": " + ".join(job.patterns), "body": job.body, "fabric": job.fabric,
             "options": json.dumps(job.options, sort_keys=True), "reason": "", **fields}
 
 
@@ -227,6 +235,7 @@ def run_job(job: Job, out) -> dict:
     from .dress import drape
     from .io import read_pattern
     from .io.garment import write_drape
+    from .outfit import outfit
 
     t0, cpu0 = time.perf_counter(), time.process_time()
     row = _row(job, "failed")
@@ -237,7 +246,7 @@ def run_job(job: Job, out) -> dict:
             raise JobTimeout(f"time-out after {timeout:g} s ({event.phase}, simulated {event.simulated_s:.2f} s)")
 
     try:
-        pattern = read_pattern(job.pattern)
+        pattern = outfit([read_pattern(p) for p in job.patterns])
         result = drape(pattern, _body(job.body), job.fabric or None, frames=job.option("frames"), fps=job.option("fps"),
                        resolution=job.option("resolution") * 1e-2, integrator=job.option("integrator"),
                        quality=job.option("quality"), self_collision=job.option("self_collision"),

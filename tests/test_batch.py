@@ -168,3 +168,13 @@ def test_defaults_are_what_tailor_drape_uses():
     args = build_parser().parse_args(["drape", "x.json"])
     assert DEFAULTS["frames"] == args.frames and DEFAULTS["resolution"] == args.resolution
     assert DEFAULTS["quality"] == args.quality and DEFAULTS["sew_timeout"] == args.sew_timeout
+
+
+def test_a_job_may_dress_an_outfit_of_several_patterns(tmp_path):
+    spec = {"jobs": [{"pattern": [str(PANELS / "trousers.json"), str(PANELS / "tshirt.json")], "frames": 1},
+                     {"pattern": str(PANELS / "tshirt.json")}]}
+    outfit_job, single = make_jobs(spec, base=tmp_path)
+    assert outfit_job.patterns == (str(PANELS / "trousers.json"), str(PANELS / "tshirt.json"))
+    assert outfit_job.id.startswith("trousers+tshirt-mannequin-own-") and single.patterns == (str(PANELS / "tshirt.json"),)
+    with pytest.raises(TailorError, match=r"jobs\[0\]\.pattern: an empty list"):
+        make_jobs({"jobs": [{"pattern": []}]}, base=tmp_path)

@@ -99,10 +99,12 @@ def test_a_walking_body_is_eased_from_its_rest_pose_into_its_first_frame():
     assert len(tl.collider_frames) == 1 + tl.keys + body.frame_count
 
 
-@pytest.mark.parametrize("integrator", sorted(INTEGRATORS))
+@pytest.mark.parametrize("integrator", [pytest.param(name, marks=pytest.mark.slow) if name in ("symplectic", "verlet") else name
+                                        for name in sorted(INTEGRATORS)])
 def test_every_integrator_survives_cuts_and_tearing_on_a_garment(integrator, mannequin):
     """A hole is cut in a sewn skirt of a weak fabric, which may then tear on: the mesh changes under
-    every integrator (the integrator forgets its history, the contacts their per-vertex memory)."""
+    every integrator (the integrator forgets its history, the contacts their per-vertex memory). CI
+    runs the implicit, forward Euler and RK4 steps; symplectic Euler and Verlet, between them, are slow tests."""
     pattern = read_pattern(PANELS / "skirt.json")
     # 5 %: at 3–4 % the torn garment shreds under RK4 (explicit, at Eq. 24's step): the guard stops it
     weak = dataclasses.replace(pattern.fabric, tear_strain=0.05)
