@@ -106,3 +106,30 @@ def test_an_outfits_obj_has_an_object_per_garment_and_its_panels_as_groups(outfi
     groups = [ln[2:] for ln in text.splitlines() if ln.startswith("g ")]
     assert objects == ["trousers", "tshirt"]
     assert "trousers/wb_front" in groups and "tshirt/left_sleeve" in groups
+
+
+def test_an_outfit_exports_one_mesh_per_garment(outfit_run, tmp_path):
+    from tailor.io.export import export
+    from tailor.io.pc2 import read_pc2
+
+    frames = np.stack([read_obj_vertices(outfit_run / f"garment_{k:04d}.obj") for k in range(2)])
+    export(outfit_run, "pc2", tmp_path, with_body=False)
+    caches = {g: read_pc2(tmp_path / f"{g}.pc2") for g in ("trousers", "tshirt")}
+    assert sum(c.shape[1] for c in caches.values()) == frames.shape[1]
+    assert all(c.shape[0] == 2 and len(read_obj(tmp_path / f"{g}_base.obj").vertices) == c.shape[1]
+               for g, c in caches.items())
+    # each garment's cache is its own vertices of the OBJ frames, in order
+    for c in caches.values():
+        d = np.linalg.norm(frames[1][None, :, :] - c[1][:, None, :], axis=2).min(axis=1)
+        assert d.max() < 1e-5
+    pygltflib = pytest.importorskip("pygltflib")
+    export(outfit_run, "glb", tmp_path)
+    gltf = pygltflib.GLTF2().load(str(tmp_path / "trousers+tshirt.glb"))
+    assert [n.name for n in gltf.nodes] == ["trousers", "tshirt", "body"]
+    assert len(gltf.animations[0].channels) >= 2
+    pytest.importorskip("pxr")
+    from pxr import Usd
+
+    export(outfit_run, "usda", tmp_path, with_body=False)
+    stage = Usd.Stage.Open(str(tmp_path / "trousers+tshirt.usda"))
+    assert [p.GetName() for p in stage.GetPrimAtPath("/tailor").GetChildren()] == ["trousers", "tshirt"]

@@ -63,7 +63,7 @@ def test_patch_meeting_a_cube_edge_lands_without_being_thrown_off():
 
 def test_drape_coefficient_grows_with_bending_and_lies_in_0_1():
     cotton = tailor.preset("cotton")
-    dc = [drape_test(cotton.with_values(bending=c), resolution=0.02, specimens=1).drape_coefficient for c in (1.0, 8.0, 60.0)]
+    dc = [drape_test(cotton.with_values(bending=c), resolution=0.03, specimens=1).drape_coefficient for c in (1.0, 8.0, 60.0)]
     assert 0.0 < dc[0] < dc[1] < dc[2] < 1.0
 
 

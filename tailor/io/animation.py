@@ -66,6 +66,8 @@ class Animation:
     contact_forces, attachment_forces : (F, N, 3) float or None
         The force the body's contact and the attachments exert on each vertex per frame [N]
         (a run's ``loads.npz``; None when unknown).
+    garments : tuple of (name, tuple of group names), optional
+        An outfit's garments and their panels (:meth:`split`); empty for one garment.
     """
 
     name: str
@@ -80,6 +82,28 @@ class Animation:
     body_faces: np.ndarray | None = None
     contact_forces: np.ndarray | None = None
     attachment_forces: np.ndarray | None = None
+    garments: tuple = ()
+
+    def split(self) -> list["Animation"]:
+        """One animation per garment of an outfit, each with its own vertices, UVs and panels and
+        without the body; ``[self]`` for one garment."""
+        if len(self.garments) < 2:
+            return [self]
+        return [self._part(name, [g for g, n in enumerate(self.group_names) if n in set(panels)])
+                for name, panels in self.garments]
+
+    def _part(self, name: str, groups: list) -> "Animation":
+        """The animation of the faces in ``groups`` only, renumbered."""
+        sel = np.isin(self.face_group, groups)
+        verts, faces = np.unique(self.faces[sel], return_inverse=True)
+        uvs, face_uv = np.unique(self.face_uv[sel], return_inverse=True)
+        group_of = np.full(len(self.group_names), -1)
+        group_of[groups] = np.arange(len(groups))
+        loads = [None if f is None else f[:, verts] for f in (self.contact_forces, self.attachment_forces)]
+        return Animation(name=name, positions=self.positions[:, verts], faces=faces.reshape(-1, 3), uv=self.uv[uvs],
+                         face_uv=face_uv.reshape(-1, 3), face_group=group_of[self.face_group[sel]],
+                         group_names=tuple(self.group_names[g] for g in groups), fps=self.fps,
+                         contact_forces=loads[0], attachment_forces=loads[1])
 
     @property
     def frame_count(self) -> int:
@@ -127,7 +151,13 @@ def animation_from_drape(result, *, with_body: bool = True) -> Animation:
                      group_names=tuple(mesh.panel_names), fps=float(result.report.fps),
                      body_positions=body, body_faces=np.asarray(result.body_faces) if body is not None else None,
                      contact_forces=np.stack(result.contact_forces) if loads else None,
-                     attachment_forces=np.stack(result.attachment_forces) if loads else None)
+                     attachment_forces=np.stack(result.attachment_forces) if loads else None,
+                     garments=_garments(result.report.garments))
+
+
+def _garments(section) -> tuple:
+    """An outfit's (garment, panels) from a report's ``garments`` section (empty: one garment)."""
+    return tuple((str(name), tuple(g["panels"])) for name, g in (section or {}).items())
 
 
 LOADS_FILE = "loads.npz"
@@ -176,7 +206,7 @@ def read_run(run_dir, *, with_body: bool = True) -> Animation:
     for p, x in zip(files, positions):
         if x.shape != first.vertices.shape:
             raise TailorError(f"{p}: {len(x)} vertices, but {files[0].name} has {len(first.vertices)}")
-    fps, name = DEFAULT_FPS, folder.name
+    fps, name, garments = DEFAULT_FPS, folder.name, ()
     report = folder / "report.json"
     if report.exists():
         try:
@@ -185,6 +215,7 @@ def read_run(run_dir, *, with_body: bool = True) -> Animation:
             raise TailorError(f"{report}: malformed JSON: {exc}") from None
         fps = float(info.get("fps", DEFAULT_FPS))
         name = str(info.get("name", name))
+        garments = _garments(info.get("garments"))
     body = body_faces = None
     body_files = _numbered(folder, "body") if with_body else []
     if body_files:
@@ -201,4 +232,5 @@ def read_run(run_dir, *, with_body: bool = True) -> Animation:
     contact, attached = read_loads(folder, len(files), len(first.vertices))
     return Animation(name=name, positions=np.stack(positions), faces=first.faces, uv=first.uv, face_uv=first.face_uv,
                      face_group=first.face_group, group_names=first.group_names, fps=fps,
-                     body_positions=body, body_faces=body_faces, contact_forces=contact, attachment_forces=attached)
+                     body_positions=body, body_faces=body_faces, contact_forces=contact, attachment_forces=attached,
+                     garments=garments)

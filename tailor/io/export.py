@@ -9,6 +9,9 @@ format     files                                         opens in
 ``usd``    ``<name>.usdc`` (``usda``: text)               Blender, Houdini, Maya, usdview, Omniverse
 =========  ===========================================  ============================================
 
+An outfit's garments are one mesh each: a PC2 cache and base mesh per garment (named after it), a
+GLB mesh and node per garment, a USD prim ``/tailor/<garment>`` per garment.
+
 :func:`export` takes a :class:`~tailor.dress.DrapeResult`, an
 :class:`~tailor.io.animation.Animation` or a run folder written by ``tailor drape``.
 """
@@ -74,9 +77,12 @@ def export(source, fmt: str, out, *, with_body: bool = True) -> list[Path]:
                 write_obj(out / f"body_{k:04d}.obj", anim.body_positions[k], anim.body_faces)
                 written.append(out / f"body_{k:04d}.obj")
     elif fmt == "pc2":
-        written.append(_write_garment_obj(out / f"{name}_base.obj", anim, 0, f"tailor: base mesh of {name}.pc2"))
-        write_pc2(out / f"{name}.pc2", anim.positions)
-        written.append(out / f"{name}.pc2")
+        parts = anim.split()  # an outfit: a cache per garment
+        for part in parts:
+            stem = name if len(parts) == 1 else part.name
+            written.append(_write_garment_obj(out / f"{stem}_base.obj", part, 0, f"tailor: base mesh of {stem}.pc2"))
+            write_pc2(out / f"{stem}.pc2", part.positions)
+            written.append(out / f"{stem}.pc2")
         if body:
             write_obj(out / "body_base.obj", anim.body_positions[0], anim.body_faces)
             write_pc2(out / "body.pc2", anim.body_positions)

@@ -123,33 +123,43 @@ def _fit_attributes(anim) -> dict:
     return out
 
 
-def write_glb(path, anim, *, with_body: bool = True) -> None:
-    """Write ``anim`` (:class:`~tailor.io.animation.Animation`) as a GLB file, atomically.
-
-    The garment (and the body if ``with_body`` and the animation has one) animate by morph
-    targets at ``anim.fps``; the garment carries its last frame's fit (:func:`_fit_attributes`).
-    Non-finite positions are refused.
-    """
-    anim.check_finite()
-    buf = _Buffer()
-    # one glTF vertex per distinct (position, uv) corner
+def _garment_mesh(buf, anim, first_material: int):
+    """(glTF mesh, morph targets) of one garment: a vertex per distinct (position, uv) corner, a
+    primitive per panel (materials numbered from ``first_material``), its last frame's fit."""
     corners = np.stack([anim.faces.ravel(), anim.face_uv.ravel()], axis=1)
     unique, inverse = np.unique(corners, axis=0, return_inverse=True)
     tri = inverse.reshape(-1, 3)
     uv = anim.uv[unique[:, 1]] * np.array([1.0, -1.0]) + np.array([0.0, 1.0])
-    materials = [{"name": name, "pbrMetallicRoughness": {"baseColorFactor": [*panel_colour(i), 1.0],
-                                                          "metallicFactor": 0.0, "roughnessFactor": 0.9},
-                  "doubleSided": True} for i, name in enumerate(anim.group_names)]
-    groups = [(g, tri[anim.face_group == g]) for g in range(len(anim.group_names)) if np.any(anim.face_group == g)]
-    garment, n_targets = _morph_mesh(buf, anim.positions, unique[:, 0], groups, uv=uv, name=anim.name,
-                                     scalars=_fit_attributes(anim))
-    garment.setdefault("extras", {})["fit_frame"] = anim.frame_count - 1
-    meshes, nodes = [garment], [{"name": anim.name, "mesh": 0}]
-    samplers, channels = [], []
-    if n_targets:
-        s, c = _weights_animation(buf, anim.frame_count, anim.fps, 0)
-        samplers.append(s)
-        channels.append({**c, "sampler": 0})
+    groups = [(first_material + g, tri[anim.face_group == g]) for g in range(len(anim.group_names))
+              if np.any(anim.face_group == g)]
+    mesh, n_targets = _morph_mesh(buf, anim.positions, unique[:, 0], groups, uv=uv, name=anim.name,
+                                  scalars=_fit_attributes(anim))
+    mesh.setdefault("extras", {})["fit_frame"] = anim.frame_count - 1
+    return mesh, n_targets
+
+
+def write_glb(path, anim, *, with_body: bool = True) -> None:
+    """Write ``anim`` (:class:`~tailor.io.animation.Animation`) as a GLB file, atomically.
+
+    The garment (an outfit: a mesh per garment) and the body if ``with_body`` and the animation has
+    one animate by morph targets at ``anim.fps``; a garment carries its last frame's fit
+    (:func:`_fit_attributes`).
+    Non-finite positions are refused.
+    """
+    anim.check_finite()
+    buf = _Buffer()
+    materials, meshes, nodes, samplers, channels = [], [], [], [], []
+    for part in anim.split():  # an outfit: one mesh per garment
+        mesh, n_targets = _garment_mesh(buf, part, len(materials))
+        materials += [{"name": name, "pbrMetallicRoughness": {"baseColorFactor": [*panel_colour(len(materials) + i), 1.0],
+                                                              "metallicFactor": 0.0, "roughnessFactor": 0.9},
+                       "doubleSided": True} for i, name in enumerate(part.group_names)]
+        meshes.append(mesh)
+        nodes.append({"name": part.name, "mesh": len(meshes) - 1})
+        if n_targets:
+            s, c = _weights_animation(buf, anim.frame_count, anim.fps, len(nodes) - 1)
+            samplers.append(s)
+            channels.append({**c, "sampler": len(samplers) - 1})
     if with_body and anim.has_body:
         body_frames = anim.body_positions
         moving = not np.all(body_frames == body_frames[0])
@@ -159,9 +169,9 @@ def write_glb(path, anim, *, with_body: bool = True) -> None:
                                          np.arange(body_frames.shape[1]), [(len(materials) - 1, anim.body_faces)],
                                          name="body")
         meshes.append(body)
-        nodes.append({"name": "body", "mesh": 1})
+        nodes.append({"name": "body", "mesh": len(meshes) - 1})
         if body_targets:
-            s, c = _weights_animation(buf, anim.frame_count, anim.fps, 1)
+            s, c = _weights_animation(buf, anim.frame_count, anim.fps, len(nodes) - 1)
             samplers.append(s)
             channels.append({**c, "sampler": len(samplers) - 1})
     blob = buf.blob()

@@ -83,6 +83,26 @@ def _fit_primvars(mesh, anim) -> None:
             primvar.Set(Vt.FloatArray.FromNumpy(values), float(k))
 
 
+def _garment_prim(stage, path: str, anim, first_colour: int) -> None:
+    """One garment's animated mesh at ``path``: UVs, fit primvars and a face subset per panel
+    (colours numbered from ``first_colour``)."""
+    from pxr import UsdGeom, Vt
+
+    colours = np.array([panel_colour(first_colour + g) for g in anim.face_group]).reshape(-1, 3)
+    garment = _mesh(stage, path, anim.positions, anim.faces, colours)
+    st = UsdGeom.PrimvarsAPI(garment).CreatePrimvar("st", _types().TexCoord2fArray, UsdGeom.Tokens.faceVarying)
+    st.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(anim.uv, dtype=np.float32)))
+    st.SetIndices(Vt.IntArray.FromNumpy(np.ascontiguousarray(anim.face_uv, np.int32).ravel()))
+    _fit_primvars(garment, anim)
+    taken: set = set()
+    for g, name in enumerate(anim.group_names):
+        faces = np.flatnonzero(anim.face_group == g).astype(np.int32)
+        if len(faces):
+            subset = UsdGeom.Subset.CreateGeomSubset(garment, _identifier(name, taken), UsdGeom.Tokens.face,
+                                                     Vt.IntArray.FromNumpy(faces), "materialBind")
+            subset.GetPrim().SetCustomDataByKey("panel", name)
+
+
 def write_usd(path, anim, *, with_body: bool = True) -> None:
     """Write ``anim`` (:class:`~tailor.io.animation.Animation`) as a USD stage, atomically.
 
@@ -90,7 +110,7 @@ def write_usd(path, anim, *, with_body: bool = True) -> None:
     """
     if not usd_available():
         raise TailorError(f"{path}: USD export needs usd-core (pip install usd-core)")
-    from pxr import Usd, UsdGeom, Vt
+    from pxr import Usd, UsdGeom
 
     anim.check_finite()
     stage = Usd.Stage.CreateInMemory()
@@ -103,19 +123,13 @@ def write_usd(path, anim, *, with_body: bool = True) -> None:
     root = UsdGeom.Xform.Define(stage, "/tailor")
     stage.SetDefaultPrim(root.GetPrim())
     stage.SetMetadata("comment", f"tailor drape of {anim.name}")
-    colours = np.array([panel_colour(g) for g in anim.face_group]).reshape(-1, 3)
-    garment = _mesh(stage, "/tailor/garment", anim.positions, anim.faces, colours)
-    st = UsdGeom.PrimvarsAPI(garment).CreatePrimvar("st", _types().TexCoord2fArray, UsdGeom.Tokens.faceVarying)
-    st.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(anim.uv, dtype=np.float32)))
-    st.SetIndices(Vt.IntArray.FromNumpy(np.ascontiguousarray(anim.face_uv, np.int32).ravel()))
-    _fit_primvars(garment, anim)
-    taken: set = set()
-    for g, name in enumerate(anim.group_names):
-        faces = np.flatnonzero(anim.face_group == g).astype(np.int32)
-        if len(faces):
-            subset = UsdGeom.Subset.CreateGeomSubset(garment, _identifier(name, taken), UsdGeom.Tokens.face,
-                                                     Vt.IntArray.FromNumpy(faces), "materialBind")
-            subset.GetPrim().SetCustomDataByKey("panel", name)
+    parts = anim.split()  # an outfit: one prim per garment
+    taken: set = {"body"}
+    first = 0
+    for part in parts:
+        prim = "/tailor/garment" if len(parts) == 1 else f"/tailor/{_identifier(part.name, taken)}"
+        _garment_prim(stage, prim, part, first)
+        first += len(part.group_names)
     if with_body and anim.has_body:
         _mesh(stage, "/tailor/body", anim.body_positions, anim.body_faces,
               np.tile(BODY_COLOUR, (len(anim.body_faces), 1)))
