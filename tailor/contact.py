@@ -202,7 +202,6 @@ class ContactPipeline:
         self._version = 0  # topology changes (cuts, tears) so far
         self._self: SelfCollider | None = None
         self._self_key = None
-        self._inv_mass = None
         self._rings = None  # (numbering, each vertex's neighbours) for untangling
 
     def configure(self, settings: ContactSettings) -> None:
@@ -255,7 +254,9 @@ class ContactPipeline:
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x)
             collider.ignore(self._open_seams(model))
-            collider.respond(self._inv_mass, state, dt)
+            # pinned (attached, or an outfit's garment waiting to sew) vertices do not move: read each
+            # step, since pins change without the vertex count changing
+            collider.respond(np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass)), state, dt)
 
     def _open_seams(self, model):
         """(N,) bool: the vertices of the open seam pairs and their neighbours (None: none open), which
@@ -290,7 +291,6 @@ class ContactPipeline:
             if stats is not None:
                 self._self.carry_stats(stats)
             self._self_key = key
-            self._inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
         return self._self
 
     def untangle(self, model, state) -> tuple:

@@ -189,3 +189,21 @@ def test_ignored_vertices_take_no_part_in_any_contact():
         collider.ignore(ignored)
         counts.append(collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01))
     assert counts[0] > 0 and counts[1] == 0 and counts[2] == 0 and counts[3] == counts[0]
+
+
+def test_cloth_contact_holds_the_vertices_pinned_now(monkeypatch):
+    # pins change without the vertex count changing (attachments at settling, an outfit's garment
+    # released after waiting to sew): cloth-cloth contact must not move a pinned vertex, nor keep
+    # one that was let go
+    from conftest import sheet
+    from tailor.contact import ContactPipeline
+
+    model, x0 = sheet(10, 10, 0.05, "cotton", vertical=False)
+    contacts = ContactPipeline(None, None, thickness=0.003, friction=0.3, self_collision="on")
+    seen = []
+    monkeypatch.setattr(SelfCollider, "respond", lambda self, inv_mass, state, dt, **kw: seen.append(inv_mass.copy()))
+    state = model.state(x0)
+    pinned = model.with_pins(np.array([0, 1]))
+    for m in (model, pinned, model):
+        contacts.respond(m, state, 0.01)
+    assert seen[0][:2].all() and not seen[1][:2].any() and seen[2][:2].all()
