@@ -10,10 +10,12 @@ handles one garment:
 
 * **Order.** Garments go innermost first: by their pattern's ``layer`` (0 unless the file gives
   one), ties in the order given.
-* **Placement.** Each garment is placed clear of the ones inside it: its own clearance plus theirs
-  and :data:`LAYER_GAP` (:class:`~tailor.pattern.Piece` ``clearance``, which
-  :func:`tailor.placement.place_panels` adds to every panel of the garment).
-* **Sewing.** Every garment sews at once; each panel keeps its own garment's fabric.
+* **Placement.** Each garment is placed clear of the ones inside it: its landmark placements get
+  their clearance plus :data:`~tailor.placement.LAYER_GAP` (:class:`~tailor.pattern.Piece`
+  ``clearance``), and :func:`tailor.placement.place_panels` rolls any row that would start behind
+  the cloth already placed further out.
+* **Sewing** in stages, innermost garment first, the outer ones waiting where they were placed
+  (:meth:`tailor.dress.garment.Garment.sew_stage`); each panel keeps its own garment's fabric.
 * **Contact between garments** is self-contact of the outfit's one mesh: perfectly inelastic
   (Carignan Eq. 5–8), over the same broad and narrow phases (:mod:`tailor.collide.cloth`).
 """
@@ -26,12 +28,9 @@ import numpy as np
 
 from .errors import PatternError
 from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSide, validate_pattern
+from .placement import LAYER_GAP
 
-__all__ = ["outfit", "LAYER_GAP", "garment_of_vertex", "out_of_order"]
-
-LAYER_GAP = 0.01
-"""Room [m] left between a garment's placement and the one inside it, beyond that one's clearance."""
-
+__all__ = ["outfit", "garment_of_vertex", "out_of_order"]
 
 def outfit(patterns, *, name: str | None = None) -> Pattern:
     """One pattern dressing ``patterns`` together, innermost first (see the module).
@@ -96,7 +95,8 @@ def _renamed_attachment(a: Attachment, garment: str, index: int) -> Attachment:
 
 
 def garment_of_vertex(pattern: Pattern, vertex_panel) -> np.ndarray:
-    """(N,) index into ``pattern.pieces`` of each vertex's garment, from its panel."""
+    """(N,) index into ``pattern.pieces`` of each vertex's garment, from its panel (or of each face's,
+    given the faces' panels)."""
     out = np.zeros(len(vertex_panel), np.intp)
     for k, piece in enumerate(pattern.pieces):
         out[(vertex_panel >= piece.first) & (vertex_panel < piece.first + piece.count)] = k

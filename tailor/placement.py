@@ -21,7 +21,7 @@ import numpy as np
 from .errors import PatternError
 from .pattern import LandmarkPlacement, TransformPlacement
 
-__all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE"]
+__all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
 
 SLOPE = 0.1
 """Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
@@ -127,8 +127,10 @@ def _clear_rigid(x, placement, inside, body_axis, clearance=0.01, reach=0.3):
     return x
 
 
-LAYER_CLEARANCE = 0.01
-"""Room [m] an outer garment's placed panels keep outside an inner garment's (beyond the test's probe)."""
+LAYER_GAP = 0.01
+"""Room [m] an outfit's outer garment is placed outside an inner one: added to the inner garment's
+clearance in the outer one's landmark placements (:func:`tailor.outfit.outfit`), and kept from the
+inner garment's placed cloth by every outer panel (:class:`_Outside`)."""
 
 
 class _Outside:
@@ -198,7 +200,7 @@ def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
     counts = {k: len(v) for k, v in counts.items()}
     for pi, panel in enumerate(pattern.panels):
         if pi and pieces[pi] != pieces[pi - 1] and inside is not None:  # an outer garment: clear of the inner ones too
-            inside = _Outside(inside, x, mesh, pieces[pi].first, LAYER_CLEARANCE)
+            inside = _Outside(inside, x, mesh, pieces[pi].first, LAYER_GAP)
         ids = mesh.panel_vertices(pi)
         uv = mesh.uv[ids]
         pl = panel.placement

@@ -127,14 +127,14 @@ def _garments(pattern, mesh) -> dict | None:
     """An outfit's section per garment for the report (None for a single garment)."""
     if not pattern.pieces:
         return None
-    out = {}
-    for piece in pattern.pieces:
-        ids = range(piece.first, piece.first + piece.count)
-        out[piece.name] = {"layer": piece.layer, "panels": [pattern.panels[i].name for i in ids],
-                           "vertices": int(np.isin(mesh.vertex_panel, ids).sum()),
-                           "faces": int(np.isin(mesh.face_panel, ids).sum()),
-                           "placement_clearance_added_m": round(piece.clearance, 6)}
-    return out
+    count = len(pattern.pieces)
+    vertices = np.bincount(garment_of_vertex(pattern, mesh.vertex_panel), minlength=count)
+    faces = np.bincount(garment_of_vertex(pattern, mesh.face_panel), minlength=count)
+    return {piece.name: {"layer": piece.layer,
+                         "panels": [p.name for p in pattern.panels[piece.first:piece.first + piece.count]],
+                         "vertices": int(vertices[k]), "faces": int(faces[k]),
+                         "placement_clearance_added_m": round(piece.clearance, 6)}
+            for k, piece in enumerate(pattern.pieces)}
 
 
 def _placement_crossings(x0, mesh, pattern) -> int:
