@@ -22,7 +22,7 @@ from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, SelfCollider,
 from .collide.untangle import vertex_rings
 from .errors import SimulationError
 
-__all__ = ["ContactPipeline", "ContactLoads", "ContactSettings", "StaticBody", "Attachments", "LimbWallContact", "BODY_MARGIN",
+__all__ = ["ContactPipeline", "ContactLoads", "ContactSettings", "StaticBody", "Attachments", "HeightHold", "LimbWallContact", "BODY_MARGIN",
            "body_margin", "check_self_collision"]
 
 BODY_MARGIN = 0.03
@@ -99,6 +99,26 @@ class Attachments:
         ids = inverse[self.ids]
         ok = ids >= 0
         return Attachments(ids[ok], self.tri[ok], self.bary[ok], self.offset[ok], self.faces)
+
+
+class HeightHold:
+    """Vertices kept at their heights while free to slide across: an attachment while sewing.
+
+    Before gravity is on, a light panel (a waistband) sewn to a heavy one (the skirt) is pulled
+    to it, since the seaming springs (Eq. 15) move the lighter side further; holding the attached
+    edge's height draws the skirt up to the band instead, while the band's own seams still close
+    round the body. ``ids`` are mesh vertices, ``heights`` theirs [m]; ``weld`` numbers the
+    simulated vertices (a welded vertex takes its members' mean height).
+    """
+
+    def __init__(self, ids, heights, weld):
+        w = weld[ids]
+        self.ids, first = np.unique(w, return_inverse=True)
+        self.heights = np.bincount(first, heights) / np.bincount(first)
+
+    def apply(self, state, body_x, body_v) -> None:
+        state.x[self.ids, 2] = self.heights
+        state.v[self.ids, 2] = 0.0
 
 
 class LimbWallContact:

@@ -305,10 +305,41 @@ def no_walls(panel_count: int) -> LimbWalls:
     return LimbWalls(np.full(panel_count, -1), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0))
 
 
-def limb_walls(pattern, landmarks, body_x=None) -> LimbWalls:
+LEGS = ("left_thigh", "right_thigh")
+"""The limbs whose wall a rigidly placed panel (GarmentCode's) keeps to when it lies on that side."""
+
+SIDE_TOLERANCE = 0.02
+"""How far [m] a rigidly placed panel's points below a limb's landmark may reach across the wall
+and the panel still count as that limb's (a trouser leg's inseam placed on the midplane)."""
+
+
+def _limb_of(pattern, pi, landmarks, placed) -> str | None:
+    """The limb landmark whose wall panel ``pi`` keeps to, or None.
+
+    A landmark placement names it. A rigid placement (GarmentCode's translations) names none: the
+    panel is a leg's when all its placed points (``placed[pi]``) below a thigh lie on that thigh's
+    side of the plane between the thighs (a skirt's panels span both sides)."""
+    pl = pattern.panels[pi].placement
+    if isinstance(pl, LandmarkPlacement):
+        return pl.landmark if _pair_plane(pl.landmark, landmarks) is not None else None
+    if placed is None:
+        return None
+    for name in LEGS:
+        plane = _pair_plane(name, landmarks) if name in landmarks else None
+        if plane is None:
+            continue
+        pts = np.asarray(placed[pi], float)
+        low = pts[pts[:, 2] < landmarks[name].height]
+        if len(low) and ((low - plane[1]) @ plane[0]).min() > -SIDE_TOLERANCE:
+            return name
+    return None
+
+
+def limb_walls(pattern, landmarks, body_x=None, placed=None) -> LimbWalls:
     """The plane each panel rolled round one of a pair of limbs (trouser legs round the thighs) may
     not cross below that limb's landmark, as a :class:`LimbWalls` following the body ``body_x``
-    (rest pose, (V, 3); None: fixed planes).
+    (rest pose, (V, 3); None: fixed planes). ``placed``, per panel its placed points ((K, 3) [m]),
+    finds the legs among rigidly placed panels (:func:`_limb_of`).
 
     A trouser leg's upper rows are rolled on cylinders wide enough to clear the hips, and the two
     legs' cylinders overlap between the legs; lower down, trouser legs are wider than legs and the
@@ -321,14 +352,10 @@ def limb_walls(pattern, landmarks, body_x=None) -> LimbWalls:
     """
     index = np.full(len(pattern.panels), -1)
     walls: dict = {}
-    for pi, panel in enumerate(pattern.panels):
-        pl = panel.placement
-        if not isinstance(pl, LandmarkPlacement) or not landmarks:
-            continue
-        plane = _pair_plane(pl.landmark, landmarks)
-        if plane is None:
-            continue
-        index[pi] = walls.setdefault(pl.landmark, (len(walls), plane))[0]
+    for pi in range(len(pattern.panels)):
+        limb = _limb_of(pattern, pi, landmarks, placed) if landmarks else None
+        if limb is not None:
+            index[pi] = walls.setdefault(limb, (len(walls), _pair_plane(limb, landmarks)))[0]
     if not walls:
         return no_walls(len(pattern.panels))
     names = sorted(walls, key=lambda k: walls[k][0])

@@ -38,6 +38,31 @@ def doc_with(panels: dict, stitches=None, **top) -> dict:
     return doc
 
 
+def gc_skirt_doc(waist_cm: float = 110.0) -> dict:
+    """A straight skirt on a waistband written as GarmentCode writes patterns: flat panels placed by
+    translations (Y up, facing +Z, cm; the back panels wound the other way), the band's free top edge
+    labelled ``lower_interface``, no attachments; the band at the waist, the skirt 5 cm below it."""
+    def rect(w, h, at, back=False, top_label=None):
+        v = [[0, 0], [0, h], [w, h], [w, 0]] if back else [[0, 0], [w, 0], [w, h], [0, h]]
+        edges = [{"endpoints": [i, (i + 1) % 4]} for i in range(4)]
+        if top_label:
+            edges[1 if back else 2]["label"] = top_label
+        return {"vertices": v, "edges": edges, "translation": at, "rotation": [0, 0, 0]}
+
+    band_y, skirt_y = waist_cm - 5.5, waist_cm - 56.0
+    panels = {"wb_front": rect(46, 5, [-23, band_y, 20], top_label="lower_interface"),
+              "wb_back": rect(40, 5, [-20, band_y, -15], back=True, top_label="lower_interface"),
+              "skirt_front": rect(58, 45, [-29, skirt_y, 25]),
+              "skirt_back": rect(50, 45, [-25, skirt_y, -20], back=True)}
+    stitches = [[{"panel": "wb_front", "edge": 3}, {"panel": "wb_back", "edge": 0}],
+                [{"panel": "wb_front", "edge": 1}, {"panel": "wb_back", "edge": 2}],
+                [{"panel": "skirt_front", "edge": 3}, {"panel": "skirt_back", "edge": 0}],
+                [{"panel": "skirt_front", "edge": 1}, {"panel": "skirt_back", "edge": 2}],
+                [{"panel": "wb_front", "edge": 0}, {"panel": "skirt_front", "edge": 2}],
+                [{"panel": "wb_back", "edge": 3}, {"panel": "skirt_back", "edge": 1}]]
+    return doc_with(panels, stitches)
+
+
 @pytest.fixture
 def square_doc():
     """One 20 × 20 cm panel."""

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import doc_with, rect_panel
+from conftest import doc_with, gc_skirt_doc, rect_panel
 from tailor.errors import PatternError, SeamError
 from tailor.io import pattern_from_dict, read_pattern
 
@@ -217,6 +217,20 @@ def test_attachment_target_and_vertex(square_doc):
     assert "pattern.attachments[0].vertex: vertex index 9 does not exist" in error_of(square_doc)
     square_doc["pattern"]["attachments"] = [{"panel": "sq", "edge": 2, "to": "nek"}]
     assert "did you mean 'neck'" in error_of(square_doc)
+
+
+def test_a_free_lower_interface_edge_is_held_at_the_waist():
+    """GarmentCode labels a lower garment's waist ``lower_interface``; its files have no attachments.
+    A free edge so labelled is attached to the waist; a sewn one (a dress's bodice to its skirt) is
+    not, and a file's own ``attachments``, even empty, are kept as they are."""
+    doc = gc_skirt_doc()
+    held = load(doc).attachments
+    assert {(a.panel, a.edge, a.target) for a in held} == {("wb_front", 2, "waist"), ("wb_back", 1, "waist")}
+    sewn = copy.deepcopy(doc)
+    sewn["pattern"]["panels"]["skirt_front"]["edges"][2]["label"] = "lower_interface"  # sewn to the band
+    assert len(load(sewn).attachments) == 2
+    doc["pattern"]["attachments"] = []
+    assert load(doc).attachments == ()
 
 
 def test_garmentcode_files_load_unchanged(garmentcode_dir):

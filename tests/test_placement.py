@@ -95,3 +95,27 @@ def test_only_trouser_legs_get_a_wall_at_the_midplane_below_the_crotch_following
     tshirt = read_pattern(PANELS / "tshirt.json")  # sleeves round the arms: a pair of limbs too, but far apart
     tmesh = discretise(tshirt, 0.04)
     assert (limb_walls(tshirt, marks).of(tmesh)[tmesh.panel_vertices(tshirt.panel_index("front"))] == -1).all()
+
+
+def test_rigidly_placed_trouser_legs_get_their_side_s_wall_and_a_skirt_panel_none(mannequin):
+    """GarmentCode's trousers are placed by translations, not round a thigh: a panel whose placed
+    points below the thigh all lie on one side of the plane between the thighs is that leg's."""
+    from conftest import doc_with, rect_panel
+    from tailor.io import pattern_from_dict
+
+    marks = find_landmarks(mannequin.vertices, mannequin.faces)
+    y = 100 * marks["left_thigh"].height - 40  # from 40 cm below the thigh up to its landmark and above
+    doc = doc_with({"leg_l": rect_panel(20, 50, translation=[0.5, y, 15], rotation=[0, 0, 0]),
+                    "leg_r": rect_panel(20, 50, translation=[-20.5, y, 15], rotation=[0, 0, 0]),
+                    "inseam_across": rect_panel(20, 50, translation=[-3, y, -15], rotation=[0, 0, 0]),
+                    "skirt": rect_panel(50, 50, translation=[-25, y, 20], rotation=[0, 0, 0])})
+    pattern = pattern_from_dict(doc, source="legs.json")
+    mesh = discretise(pattern, 0.04)
+    x = place_panels(pattern, mesh, marks)
+    placed = [x[mesh.panel_vertices(k)] for k in range(len(pattern.panels))]
+    walls = limb_walls(pattern, marks, None, placed)
+    normal = walls.at()[0]
+    wall = {p.name: walls.panel[k] for k, p in enumerate(pattern.panels)}
+    assert normal[wall["leg_l"]] @ [1, 0, 0] > 0.99 and normal[wall["leg_r"]] @ [1, 0, 0] < -0.99  # left = +X
+    assert wall["inseam_across"] == -1 and wall["skirt"] == -1  # 3 cm across: not one leg's
+    assert (limb_walls(pattern, marks).panel == -1).all()  # without the placed points, only landmark placements

@@ -111,7 +111,8 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     landmarks = measure_body(body, timeline.pose)
     loops = check_loops(pattern, landmarks)  # a loop too small for the body fails now, not at the sewing time-out
     x0 = place_panels(pattern, mesh, landmarks, inside=InsideTest(timeline.pose, body.faces))
-    walls = limb_walls(pattern, landmarks, timeline.pose) if opts.limb_walls else None
+    placed = [x0[mesh.panel_vertices(k)] for k in range(len(pattern.panels))]
+    walls = limb_walls(pattern, landmarks, timeline.pose, placed) if opts.limb_walls else None
     garment = Garment(pattern, mesh, fabrics, merge_distance=max(0.3 * opts.resolution, 0.002))
     if walls is not None and walls.count:
         x0 = walls.separate(x0, mesh, garment.thickness)

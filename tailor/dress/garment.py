@@ -124,14 +124,19 @@ class Garment:
         self.waiting = np.flatnonzero(garment > k)
         return self.rebuild(state)
 
+    @property
+    def attached(self) -> np.ndarray:
+        """Mesh vertices of the pattern's attachments (sorted, unique; empty without any)."""
+        held = [attachment_vertices(self.pattern, self.mesh, a) for a in self.pattern.attachments]
+        return np.unique(np.concatenate(held)) if held else np.zeros(0, np.intp)
+
     def attach(self, state, collider, pose):
         """Gravity on, the pattern's attachments pinned where they lie on the body (Eq. 19–20).
 
         Returns (state of the rebuilt model, :class:`~tailor.contact.Attachments` or None)."""
-        held = [attachment_vertices(self.pattern, self.mesh, a) for a in self.pattern.attachments]
+        ids = self.attached
         self.gravity = True
-        if held:
-            ids = np.unique(np.concatenate(held))
+        if len(ids):
             dist, tri, bary, _ = collider.nearest(state.x[self.weld[ids]], pose, 0, cache=False)
             ok = tri >= 0
             self.pins = ids[ok]

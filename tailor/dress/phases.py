@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from ..contact import LimbWallContact
+from ..contact import HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..sim import Guard, Stepper, max_stretch
@@ -41,6 +41,7 @@ class Dressing:
                  on_frame=None, progress=None):
         self.options, self.garment, self.timeline, self.contacts = options, garment, timeline, contacts
         self.walls, self.attachments = walls, None
+        self.held_heights = None  # (mesh vertices, heights [m]) of the attachments while sewing
         self.integrator, self.quality = integrator, quality
         self.stepper = Stepper(integrator, contacts=contacts)
         self.on_frame, self.progress = on_frame, progress
@@ -54,10 +55,12 @@ class Dressing:
         self.constrain()
 
     def constrain(self) -> None:
-        """The contacts' constraints for the garment's current numbering: limb walls, attachments."""
+        """The contacts' constraints for the garment's current numbering: limb walls, attachments
+        (while sewing, their heights)."""
         g = self.garment
         walls = LimbWallContact(self.walls, g.mesh, g.weld, g.thickness) if self.walls is not None and self.walls.count else None
-        self.contacts.constrain(walls, self.attachments)
+        held = HeightHold(*self.held_heights, g.weld) if self.held_heights is not None else None
+        self.contacts.constrain(walls, self.attachments, held)
 
     @property
     def frame_dt(self) -> float:
@@ -142,6 +145,9 @@ def sew(d: Dressing, x0):
     d.enter(SEWING)
     g, sewing = d.garment, d.garment.sewing
     state = g.model.state(x0)
+    if len(g.attached):
+        d.held_heights = (g.attached, x0[g.attached, 2])
+        d.constrain()
     frames, total = 0, 0.0
     merge_distance = sewing.merge_distance
     for k in range(g.stages):
@@ -187,6 +193,7 @@ def settle(d: Dressing, state):
     """Phase 2: gravity on, the attachments pinned, the garment comes to rest for ``settle`` s."""
     t0 = time.perf_counter()
     state, d.attachments = d.garment.attach(state, d.contacts.body, d.timeline.pose)
+    d.held_heights = None
     d.contacts.follow(d.garment.friction)
     d.constrain()
     d.enter(SETTLING)

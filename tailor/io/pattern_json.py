@@ -133,7 +133,10 @@ def pattern_from_dict(doc, *, source: str = "<pattern>", name: str | None = None
     by_name = {p.name: p for p in panels}
     stitches = pat.key("stitches", [])
     seams = tuple(_seam(n, i, by_name) for i, n in enumerate(stitches.items()))
-    attachments = tuple(_attachment(n, i, by_name) for i, n in enumerate(pat.key("attachments", []).items()))
+    if pat.has("attachments"):
+        attachments = tuple(_attachment(n, i, by_name) for i, n in enumerate(pat.key("attachments").items()))
+    else:
+        attachments = _waist_holds(panels, seams)
     pattern = Pattern(
         name=name or "pattern",
         panels=panels,
@@ -401,6 +404,22 @@ def _auto_orientation(a: SeamSide, b: SeamSide, panels: dict) -> str:
     # Far-apart short edges barely tell: trust the placement only when it is decisive.
     length = 0.5 * (np.linalg.norm(a1 - a0) + np.linalg.norm(b1 - b0))
     return "same" if opposite - same > _DECISIVE * length else "opposite"
+
+
+WAIST_LABEL = "lower_interface"
+"""GarmentCode's label of the edges where a lower garment meets an upper one: on a skirt's or
+trousers' free top edge, the waist."""
+
+
+def _waist_holds(panels, seams) -> tuple:
+    """Attachments to the waist of the free (unsewn) edges labelled :data:`WAIST_LABEL`.
+
+    GarmentCode files carry no attachments; a skirt or trousers held only by friction slides down
+    over the hips while it settles. A file with its own ``attachments`` (even empty) keeps them."""
+    sewn = {(s.panel, s.hole, s.edge) for seam in seams for s in (seam.a, seam.b)}
+    free = [(p.name, k) for p in panels for k, e in enumerate(p.edges)
+            if e.label == WAIST_LABEL and (p.name, None, k) not in sewn]
+    return tuple(Attachment(name, "waist", k, index=i) for i, (name, k) in enumerate(free))
 
 
 def _attachment(node: Node, index: int, panels: dict) -> Attachment:
