@@ -224,6 +224,11 @@ class Seam:
     index: int = 0
 
 
+WAIST_LABEL = "lower_interface"
+"""GarmentCode's edge label where a lower garment meets an upper one: a dress's bodice-to-skirt
+seam, or on a skirt's or trousers' free top edge, the waist."""
+
+
 @dataclass(frozen=True, slots=True)
 class Attachment:
     """Part of a panel held to the body or to a pin (Carignan Eq. 19–20).
@@ -310,6 +315,15 @@ class Pattern:
     def area(self) -> float:
         """Total fabric area [m²]."""
         return float(sum(p.area for p in self.panels))
+
+    def side_label(self, side: SeamSide) -> str:
+        """The file's label of a seam side's edge ("" without one)."""
+        return self.panel(side.panel).loop(side.hole)[side.edge].label
+
+    def joins_at_waist(self, seam: Seam) -> bool:
+        """Whether ``seam`` joins an upper garment to a lower one: one of its edges is labelled
+        :data:`WAIST_LABEL` (a dress's skirt, sewn to its bodice)."""
+        return WAIST_LABEL in (self.side_label(seam.a), self.side_label(seam.b))
 
     def side_length(self, side: SeamSide) -> float:
         """Length [m] of a seam side's stretch of edge."""

@@ -20,6 +20,11 @@ from scipy.sparse.csgraph import connected_components
 __all__ = ["Sewing", "merge_state"]
 
 
+STALL = 0.02
+"""A seam pair whose gap shrinks by less than this fraction from one frame's :meth:`Sewing.close`
+to the next is stuck: pressed against the body by the straight pull."""
+
+
 @dataclass
 class Sewing:
     """The seam pairs of a garment and which of them are merged (indices of the unwelded mesh).
@@ -39,6 +44,13 @@ class Sewing:
         Widest gap [m] any pair had when it was merged.
     active : (S,) bool
         The pairs sewing now (an outfit sews one garment at a time: :meth:`sew_only`); all at first.
+    seam : (S,) int or None
+        The pattern seam of each pair (given per pair of ``pairs`` as passed in; kept in step with
+        the pairs kept).
+    meeting : callable or None
+        Where the pairs whose midpoint lies inside the body meet instead (:meth:`route_around`).
+    stuck : (S,) bool
+        Pairs that once closed by less than :data:`STALL` of their gap from one :meth:`close` to the next.
     """
 
     pairs: np.ndarray
@@ -48,11 +60,18 @@ class Sewing:
     merged: np.ndarray = field(default=None)
     max_gap_at_merge: float = 0.0
     active: np.ndarray = field(default=None)
+    seam: np.ndarray = field(default=None)
+    meeting: object = field(default=None, repr=False)
+    meeting_beyond: float = 0.0
 
     def __post_init__(self):
         pairs = np.asarray(self.pairs, dtype=np.intp).reshape(-1, 2)
         keep = pairs[:, 0] != pairs[:, 1]
         self.pairs = pairs[keep]
+        if self.seam is not None:
+            self.seam = np.asarray(self.seam, np.intp)[keep]
+        self.stuck = np.zeros(len(self.pairs), bool)
+        self._last_gap = np.full(len(self.pairs), np.inf)
         if self.merged is None:
             self.merged = np.zeros(len(self.pairs), bool)
         self.active = np.ones(len(self.pairs), bool) if self.active is None else np.asarray(self.active, bool)[keep]
@@ -86,8 +105,19 @@ class Sewing:
         index[order] = np.arange(len(first))
         return index[labels]
 
+    def route_around(self, meeting, beyond: float = 0.0) -> None:
+        """Pairs :attr:`stuck` farther apart than ``beyond`` [m] whose midpoint lies inside the body
+        meet at ``meeting(midpoints) -> (ids, points)`` instead, points clear of the body (None:
+        every pair meets at its midpoint). Nearer pairs are the implicit springs' (:meth:`near_stiffness`);
+        pairs still closing are left to the straight pull, which slides round the body well enough."""
+        self.meeting, self.meeting_beyond = meeting, beyond
+
     def forces(self, model, state, weld, out):
-        """Add Eq. 15 forces of the open pairs sewing now into ``out`` [N] (welded model and state)."""
+        """Add Eq. 15 forces of the open pairs sewing now into ``out`` [N] (welded model and state).
+
+        Each end is drawn to the pair's meeting point, the midpoint, critically damped. A strap's
+        two ends in front of and behind a shoulder would be drawn straight through it and stop on
+        its surface; with :meth:`route_around` they are drawn to a point over it instead."""
         now = ~self.merged & self.active
         i, j = weld[self.pairs[now, 0]], weld[self.pairs[now, 1]]
         keep = i != j
@@ -95,14 +125,19 @@ class Sewing:
         if not len(i):
             return out
         d = state.x[j] - state.x[i]
-        rel_v = state.v[j] - state.v[i]
-        accel = self.rate * d + 2.0 * np.sqrt(2.0 * self.rate) * rel_v  # critically damped closing
-        norm = np.linalg.norm(accel, axis=1)
-        accel *= np.minimum(1.0, self.max_acceleration / np.maximum(norm, 1e-300))[:, None]
+        to_i, to_j = d.copy(), -d  # twice the way to the meeting point
+        far = np.flatnonzero(self.stuck[now][keep] & (np.einsum("ij,ij->i", d, d) > self.meeting_beyond ** 2))
+        if self.meeting is not None and len(far):
+            ids, met = self.meeting(0.5 * (state.x[i[far]] + state.x[j[far]]))
+            ids = far[ids]
+            to_i[ids], to_j[ids] = 2.0 * (met - state.x[i[ids]]), 2.0 * (met - state.x[j[ids]])
+        damp = 2.0 * np.sqrt(2.0 * self.rate) * (state.v[j] - state.v[i])  # critically damped closing
         m = model.vertex_mass
-        for k in range(3):
-            out[:, k] += np.bincount(i, m[i] * accel[:, k], minlength=len(out))
-            out[:, k] -= np.bincount(j, m[j] * accel[:, k], minlength=len(out))
+        for ends, accel in ((i, self.rate * to_i + damp), (j, self.rate * to_j - damp)):
+            norm = np.linalg.norm(accel, axis=1)
+            accel *= np.minimum(1.0, self.max_acceleration / np.maximum(norm, 1e-300))[:, None]
+            for k in range(3):
+                out[:, k] += np.bincount(ends, m[ends] * accel[:, k], minlength=len(out))
         return out
 
     def open_pairs(self, weld) -> np.ndarray:
@@ -129,6 +164,9 @@ class Sewing:
         if not len(open_):
             return 0
         gap = self.gaps(x)[open_]
+        # a pair that closed less than STALL of its gap since the last call is stuck (for good)
+        self.stuck[open_] |= gap > (1.0 - STALL) * self._last_gap[open_]
+        self._last_gap[open_] = gap
         close = gap < self.merge_distance
         if close.any():
             self.max_gap_at_merge = max(self.max_gap_at_merge, float(gap[close].max()))

@@ -156,3 +156,31 @@ def test_walking_garments_do_not_pass_through_themselves(garment, resolution, fr
                    resolution=resolution)
     assert max(result.report.crossings_per_frame) == 0
     assert result.report.max_penetration_m <= 0.001
+
+
+def test_a_skirt_sews_to_its_bodice_after_the_bodice_closes():
+    """GarmentCode labels a dress's skirt waist ``lower_interface``: the seams joining it to the
+    bodice form a second sewing stage, so the bodice closes over the shoulders before the heavier
+    skirt can draw it down. A skirt's band (its labelled edge free) needs no second stage."""
+    from conftest import doc_with, gc_skirt_doc, rect_panel
+    from tailor.dress.garment import Garment
+    from tailor.io import pattern_from_dict
+    from tailor.mesh import discretise
+
+    def plan(doc):
+        pattern = pattern_from_dict(doc, source="dress.json")
+        mesh = discretise(pattern, 0.05)
+        garment = Garment(pattern, mesh, {i: pattern.fabric for i in range(len(pattern.panels))}, 0.01)
+        return pattern, mesh, garment
+
+    skirt = rect_panel(40, 30)
+    skirt["edges"][2]["label"] = "lower_interface"
+    doc = doc_with({"front": rect_panel(40, 40), "back": rect_panel(40, 40), "skirt": skirt},
+                   [[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}],
+                    [{"panel": "front", "edge": 0}, {"panel": "skirt", "edge": 2}]])
+    pattern, mesh, garment = plan(doc)
+    assert garment.stages == 2
+    first, _ = garment.stage_plan()[0]
+    seam_of_pair = garment.sewing.seam
+    assert set(seam_of_pair[first]) == {0} and set(seam_of_pair[~first]) == {1}
+    assert plan(gc_skirt_doc())[2].stages == 1

@@ -73,3 +73,46 @@ def test_only_the_pairs_sewing_now_pull_and_merge():
     assert sewing.close(x) == 1 and sewing.merged.tolist() == [True, False]  # pair 2–3 is as close, but waits
     sewing.sew_only([False, True])
     assert sewing.close(x) == 1 and sewing.open_count == 0
+
+
+def test_each_kept_pair_keeps_its_seam_when_self_pairs_are_dropped():
+    # a dart's tip pairs with itself and is dropped: the pairs after it must still name their own
+    # seam (the sewing time-out's message named a dart for the GarmentCode dress's open shoulder)
+    sewing = Sewing(np.array([[0, 1], [2, 2], [3, 4], [5, 6]]), seam=[0, 0, 0, 1])
+    assert sewing.seam.tolist() == [0, 0, 1]
+
+
+def test_pairs_whose_midpoint_is_inside_the_body_meet_over_it():
+    """Two strap ends in front of and behind a shoulder (here a ball round the origin) are drawn to
+    the point over it that ``meeting`` gives, not straight at each other through it; a near pair,
+    the implicit springs', still meets at its midpoint."""
+    from types import SimpleNamespace
+
+    from tailor.model import State
+
+    x = np.array([[0.0, -0.2, 0.0], [0.0, 0.2, 0.0], [0.5, 0.0, 0.0], [0.52, 0.0, 0.0]])
+    over = np.array([0.0, 0.0, 0.15])
+
+    def meeting(mid):
+        inside = np.flatnonzero(np.linalg.norm(mid, axis=1) < 0.1)
+        return inside, np.tile(over, (len(inside), 1))
+
+    sewing = Sewing(np.array([[0, 1], [2, 3]]), max_acceleration=1e9)
+    sewing.route_around(meeting, beyond=0.04)
+    model = SimpleNamespace(vertex_mass=np.ones(4))
+
+    def pull():
+        return sewing.forces(model, State(x, np.zeros((4, 3)), 0.0), np.arange(4), np.zeros((4, 3)))
+
+    f = pull()
+    assert np.allclose(f[0], -f[1]) and f[0, 1] > 0  # still closing: straight
+    sewing.close(x)
+    sewing.close(x)  # not closer than a frame ago: stuck
+    assert sewing.stuck.all()
+    f = pull()
+    for end in (0, 1):
+        assert np.allclose(f[end] / np.linalg.norm(f[end]), (over - x[end]) / np.linalg.norm(over - x[end]))
+    assert np.allclose(f[2], -f[3]) and f[2, 0] > 0 and not f[2, 1:].any()
+    sewing.route_around(None)
+    f = pull()
+    assert np.allclose(f[0], -f[1]) and f[0, 1] > 0 and not f[0, [0, 2]].any()  # straight through

@@ -147,18 +147,32 @@ class BodyCollider:
         those inside, and confirmed by the closest triangle within ``reach`` facing away, are
         put ``thickness`` outside it at the body's velocity (inelastic, as Eq. 9–10).
         """
-        inside = np.flatnonzero(points_inside(state.x, body_x, self.faces) & ~model.vertex_pinned)
-        if not len(inside):
+        ids, tri, bary, out = self.push_out(state.x, body_x, frame, clearance=thickness, reach=reach,
+                                            skip=model.vertex_pinned)
+        if not len(ids):
             return 0
-        keys = self._query(state.x[inside], frame, np.arange(len(inside)), radius=reach)
-        dist, tri, bary, normal = self._closest(state.x[inside], *self._csr(keys, len(inside)), body_x)
-        ok = (tri >= 0) & (dist < 0.0)
-        ids, dist, tri, bary, normal = inside[ok], dist[ok], tri[ok], bary[ok], normal[ok]
-        state.x[ids] += (thickness - dist)[:, None] * normal
+        state.x[ids] = out
         state.v[ids] = (body_v[self.faces[tri]] * bary[:, :, None]).sum(axis=1)
         if self._previous is not None and len(self._previous) == len(state.x):
             self._previous[ids] = thickness
         return len(ids)
+
+    def push_out(self, points, body_x, frame: int, *, clearance: float, reach: float = 0.15, skip=None):
+        """The ``points`` inside the closed body surface (:func:`points_inside`; not ``skip``, (N,) bool)
+        whose closest triangle within ``reach`` faces away from them, put ``clearance`` outside it.
+
+        Returns (ids, their closest triangles, barycentrics, the points moved out (K, 3))."""
+        inside = points_inside(points, body_x, self.faces)
+        if skip is not None:
+            inside &= ~skip
+        inside = np.flatnonzero(inside)
+        if not len(inside):
+            return inside, inside, np.zeros((0, 3)), np.zeros((0, 3))
+        keys = self._query(points[inside], frame, np.arange(len(inside)), radius=reach)
+        dist, tri, bary, normal = self._closest(points[inside], *self._csr(keys, len(inside)), body_x)
+        ok = (tri >= 0) & (dist < 0.0)
+        out = points[inside[ok]] + (clearance - dist[ok])[:, None] * normal[ok]
+        return inside[ok], tri[ok], bary[ok], out
 
     def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness: float, skip=None):
         """The vertices a step would bring within ``thickness`` of the body, as :class:`Contacts` to hold.

@@ -55,7 +55,7 @@ class Garment:
         self.unwelded = build_model(mesh, fabrics, air_density=AIR_DENSITY, compression=COMPRESSION)
         self.mass = np.asarray(self.unwelded.vertex_mass)
         self._panel_friction = np.array([fabrics[i].friction for i in range(len(pattern.panels))])
-        self.sewing = Sewing(mesh.seam_pairs, merge_distance=merge_distance)
+        self.sewing = Sewing(mesh.seam_pairs, merge_distance=merge_distance, seam=mesh.seam_pair_seam)
         self.weld = np.arange(mesh.vertex_count)
         self.friction = self._panel_friction[mesh.vertex_panel]
         self.pins = np.zeros(0, np.intp)  # mesh vertices held to the body
@@ -108,20 +108,38 @@ class Garment:
         out.t = state.t
         return out
 
+    def stage_plan(self) -> list:
+        """(pairs sewing, mesh vertices waiting pinned) of each sewing stage, in order.
+
+        An outfit sews one garment at a time, innermost first, the garments outside waiting where
+        they were placed. Within a garment, the seams joining its upper part to its lower part
+        (:meth:`~tailor.pattern.Pattern.joins_at_waist`: a dress's bodice to its skirt) sew after
+        the rest: the bodice closes over the shoulders first and hangs there, instead of being drawn
+        down to the heavier skirt below the shoulders, where its straps could no longer meet.
+        """
+        pattern, pairs = self.pattern, self.sewing.pairs
+        garment = garment_of_vertex(pattern, self.mesh.vertex_panel)
+        late = np.array([pattern.joins_at_waist(seam) for seam in pattern.seams], bool)
+        late = late[self.sewing.seam] if self.sewing.seam is not None else np.zeros(len(pairs), bool)
+        plan = []
+        for k in range(max(1, len(pattern.pieces))):
+            for part in (~late, late):
+                sewing = (garment[pairs[:, 0]] == k) & part
+                if sewing.any():
+                    plan.append((sewing, np.flatnonzero(garment > k)))
+        return plan or [(np.ones(len(pairs), bool), np.zeros(0, np.intp))]
+
     @property
     def stages(self) -> int:
-        """Sewing stages: an outfit sews one garment at a time, innermost first; one garment, once."""
-        return max(1, len(self.pattern.pieces))
+        """Sewing stages (:meth:`stage_plan`): one for a single garment without a waist seam."""
+        return len(self.stage_plan())
 
     def sew_stage(self, state, k: int):
-        """Begin sewing stage ``k`` of :attr:`stages`: only garment ``k``'s seams pull and merge, the
-        garments outside it wait where they were placed (pinned), those inside are sewn. Returns the
-        state of the rebuilt model."""
-        if not self.pattern.pieces:
-            return state
-        garment = garment_of_vertex(self.pattern, self.mesh.vertex_panel)
-        self.sewing.sew_only(garment[self.sewing.pairs[:, 0]] == k)
-        self.waiting = np.flatnonzero(garment > k)
+        """Begin sewing stage ``k`` of :attr:`stages`: only its pairs pull and merge, the garments
+        outside wait where they were placed (pinned). Returns the state of the rebuilt model."""
+        sewing, waiting = self.stage_plan()[k]
+        self.sewing.sew_only(sewing)
+        self.waiting = waiting
         return self.rebuild(state)
 
     @property

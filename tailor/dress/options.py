@@ -20,13 +20,24 @@ from ..tearing import Cut
 
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
            "NEAR_SEAM", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_KEYS", "STRAGGLERS", "MIN_STRAGGLERS",
-           "STRAGGLER_REACH", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH"]
+           "STRAGGLER_REACH", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER"]
 
 DRAPE_RESOLUTION = 0.02
 """Default garment mesh edge length [m] of :func:`~tailor.dress.drape` and ``tailor drape`` (2 cm)."""
 
 NEAR_SEAM = 0.08
 """Seam pairs closer than this [m] are pulled by stiff implicit springs."""
+
+ROUTE_BEYOND = 0.04
+"""Seam pairs farther apart than this [m] whose midpoint is inside the body meet at a point over it
+(:meth:`~tailor.seams.Sewing.route_around`): a sleeveless dress's straps, placed flat in front of and
+behind the shoulder, are drawn over it instead of into it (docs/measurements.md, "Seams round the
+body")."""
+
+ROUTE_AFTER = 0.25
+"""... once this fraction of the sewing time-out has passed: a garment that sews in that time (most
+close within a second) is sewn by straight pulls alone; routed from the start, sleeves' underarm
+pairs were drawn round the arm and through each other."""
 
 NEAR_RATE = 80000.0
 """Their rate k [1/s²] (Eq. 15's k·η folded in): strong enough to stretch a waistband into place."""

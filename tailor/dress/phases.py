@@ -23,7 +23,7 @@ from ..contact import HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..sim import Guard, Stepper, max_stretch
-from .options import (MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
+from .options import (ROUTE_AFTER, ROUTE_BEYOND, MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
                       STRAGGLERS, TRANSITION, TRANSITION_S, MOTION, DrapeOptions, PhaseSettings)
 from .report import DrapeProgress, PhaseReport
 
@@ -157,11 +157,14 @@ def sew(d: Dressing, x0):
             d.contacts.follow(g.friction)
             d.constrain()
         t = 0.0
+        sewing.route_around(None)
         while sewing.sewing_count and t < d.options.sew_timeout:
             state = d.advance(state, d.frame_dt)
             t += d.frame_dt
             frames += 1
             _widen_merging(sewing, t, d.options)
+            if t >= ROUTE_AFTER * d.options.sew_timeout and sewing.meeting is None:  # stuck on the body
+                sewing.route_around(lambda points: _clear_of_body(d, points), beyond=ROUTE_BEYOND)
             if sewing.close(g.frame(state)):
                 state = d.weld(state)
             if d.options.record_sewing:
@@ -170,8 +173,19 @@ def sew(d: Dressing, x0):
         total += t
         if sewing.sewing_count:
             raise SimulationError(_open_seams(g, state, d.options.sew_timeout))
+    sewing.route_around(None)
     return state, PhaseReport(total, time.perf_counter() - t0, frames,
                               {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds})
+
+
+def _clear_of_body(d: Dressing, points):
+    """(ids, points moved out) of the ``points`` inside the still body: where seam pairs meet
+    (:meth:`~tailor.seams.Sewing.route_around`), two thicknesses out."""
+    body = d.contacts.body
+    if body is None:
+        return np.zeros(0, np.intp), np.zeros((0, 3))
+    ids, _, _, out = body.push_out(points, d.timeline.pose, 0, clearance=2.0 * d.garment.thickness)
+    return ids, out
 
 
 def _open_seams(garment, state, timeout: float) -> str:
@@ -179,7 +193,7 @@ def _open_seams(garment, state, timeout: float) -> str:
     sewing, pattern = garment.sewing, garment.pattern
     gaps = np.where(sewing.merged | ~sewing.active, 0.0, sewing.gaps(garment.frame(state)))
     w = int(np.argmax(gaps))
-    seam = pattern.seams[garment.mesh.seam_pair_seam[w]]
+    seam = pattern.seams[sewing.seam[w]]
 
     def side(sd):
         return f"{sd.panel}" + (f" hole {sd.hole}" if sd.hole is not None else "") + f" edge {sd.edge}"

@@ -38,6 +38,7 @@ from ..pattern import (
     Seam,
     SeamSide,
     TransformPlacement,
+    WAIST_LABEL,
     validate_pattern,
 )
 from ..units import DEG, G_PER_M2, MM, PERCENT
@@ -404,11 +405,6 @@ def _auto_orientation(a: SeamSide, b: SeamSide, panels: dict) -> str:
     # Far-apart short edges barely tell: trust the placement only when it is decisive.
     length = 0.5 * (np.linalg.norm(a1 - a0) + np.linalg.norm(b1 - b0))
     return "same" if opposite - same > _DECISIVE * length else "opposite"
-
-
-WAIST_LABEL = "lower_interface"
-"""GarmentCode's label of the edges where a lower garment meets an upper one: on a skirt's or
-trousers' free top edge, the waist."""
 
 
 def _waist_holds(panels, seams) -> tuple:
