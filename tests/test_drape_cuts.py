@@ -26,7 +26,7 @@ def test_a_cuts_file_cuts_the_draped_skirt_and_each_obj_frame_has_its_own_mesh(t
     cuts = tmp_path / "cuts.json"
     cuts.write_text(json.dumps({"cuts": [
         {"time": 0.04, "points": [[100 * c for c in HOLE]], "radius": 5},
-        {"time": 0.08, "points": [[10, -20, 50], [10, -20, 70]], "radius": 6, "separate": True},
+        {"time": 0.08, "points": [[10, -15, 50], [10, -15, 70]], "radius": 6, "separate": True},
     ]}))
     out = tmp_path / "cut"
     assert main(["--quiet", "drape", str(PANELS / "skirt.json"), "--resolution", "4", "--frames", "4", "--cuts",
