@@ -102,21 +102,33 @@ class Attachments:
 
 
 class HeightHold:
-    """Vertices kept at their heights while free to slide across: an attachment while sewing.
+    """Vertices kept at their heights while free to slide across (an attachment while sewing), and
+    the rest of their panels kept from rising above them.
 
     Before gravity is on, a light panel (a waistband) sewn to a heavy one (the skirt) is pulled
     to it, since the seaming springs (Eq. 15) move the lighter side further; holding the attached
     edge's height draws the skirt up to the band instead, while the band's own seams still close
-    round the body. ``ids`` are mesh vertices, ``heights`` theirs [m]; ``weld`` numbers the
-    simulated vertices (a welded vertex takes its members' mean height).
+    round the body, and the band's ceiling keeps the skirt coming up from folding it up over its
+    top. ``ids`` are mesh vertices and ``heights`` theirs [m]; ``under`` and ``ceilings`` [m] the
+    mesh vertices held below a height; ``weld`` numbers the simulated vertices (a welded vertex
+    takes its members' mean height, and the lowest ceiling).
     """
 
-    def __init__(self, ids, heights, weld):
-        w = weld[ids]
-        self.ids, first = np.unique(w, return_inverse=True)
+    def __init__(self, ids, heights, weld, under=(), ceilings=()):
+        self.ids, first = np.unique(weld[ids], return_inverse=True)
         self.heights = np.bincount(first, heights) / np.bincount(first)
+        under = weld[np.asarray(under, np.intp)]
+        self.under = np.unique(under)
+        self.ceilings = np.full(len(self.under), np.inf)
+        np.minimum.at(self.ceilings, np.searchsorted(self.under, under), np.asarray(ceilings, float))
 
     def apply(self, state, body_x, body_v) -> None:
+        z = state.x[self.under, 2]
+        over = z > self.ceilings
+        if over.any():
+            i = self.under[over]
+            state.x[i, 2] = self.ceilings[over]
+            state.v[i, 2] = np.minimum(state.v[i, 2], 0.0)
         state.x[self.ids, 2] = self.heights
         state.v[self.ids, 2] = 0.0
 

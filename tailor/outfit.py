@@ -114,15 +114,21 @@ def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02) -> np.n
     from .collide import body_gap
 
     x = np.asarray(x, float)
-    gap = body_gap(x, body_x, body_faces)[0]
     count = int(garment.max(initial=0)) + 1
-    out = np.zeros((count, count), np.intp)
+    near = []  # (i, j, outer vertices within reach of garment i, their nearest vertex of garment i)
     for i in range(count):
         inner = np.flatnonzero(garment == i)
         tree = cKDTree(x[inner])
         for j in range(i + 1, count):
             outer = np.flatnonzero(garment == j)
             d, k = tree.query(x[outer], distance_upper_bound=reach)
-            near = np.isfinite(d)
-            out[i, j] = int(np.count_nonzero(gap[outer[near]] < gap[inner[k[near]]]))
+            found = np.isfinite(d)
+            near.append((i, j, outer[found], inner[k[found]]))
+    ids = np.unique(np.concatenate([np.r_[a, b] for _, _, a, b in near] + [np.zeros(0, np.intp)]))
+    gap = np.zeros(len(x))
+    if len(ids):  # the body's distance only where two garments overlap: the costly query
+        gap[ids] = body_gap(x[ids], body_x, body_faces)[0]
+    out = np.zeros((count, count), np.intp)
+    for i, j, outer, nearest in near:
+        out[i, j] = int(np.count_nonzero(gap[outer] < gap[nearest]))
     return out

@@ -64,3 +64,21 @@ def test_attachments_follow_a_renumbering_and_drop_removed_vertices():
     inverse = np.array([0, 1, 2, -1, 3, 7])  # vertex 3 was cut away, 5 became 7
     b = a.renumbered(inverse)
     assert b.ids.tolist() == [0, 7] and b.tri.tolist() == [0, 0]
+
+
+def test_a_held_edge_keeps_its_height_and_its_panel_stays_below_it():
+    """While sewing, an attached edge keeps its height but slides across; the rest of its panel may
+    not rise above it (a skirt drawn up to its band must not fold the band up over its top)."""
+    from tailor.contact import HeightHold
+    from tailor.model import State
+
+    x = np.array([[0.0, 0, 1.0], [0.1, 0, 1.0], [0.0, 0, 0.95], [0.1, 0, 0.95], [0.0, 0, 0.5]])
+    moved = x + [[0.02, 0.01, -0.03], [0.0, 0.0, 0.01], [0.0, 0.0, 0.08], [0.0, 0.0, -0.01], [0.0, 0.0, 0.7]]
+    weld = np.array([0, 1, 2, 3, 4])
+    hold = HeightHold([0, 1], [1.0, 1.0], weld, under=[0, 1, 2, 3], ceilings=[1.0] * 4)
+    state = State(moved.copy(), np.tile([0.0, 0.0, 1.0], (5, 1)), 0.0)
+    hold.apply(state, None, None)
+    assert np.allclose(state.x[:2, 2], 1.0) and np.allclose(state.x[:2, :2], moved[:2, :2])  # height only
+    assert state.x[2, 2] == 1.0 and state.v[2, 2] == 0.0  # folded up over the edge: back under it
+    assert state.x[3, 2] == moved[3, 2] and state.v[3, 2] == 1.0  # below: free
+    assert state.x[4, 2] == moved[4, 2]  # another panel (the skirt): free

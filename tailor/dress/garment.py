@@ -148,6 +148,17 @@ class Garment:
         held = [attachment_vertices(self.pattern, self.mesh, a) for a in self.pattern.attachments]
         return np.unique(np.concatenate(held)) if held else np.zeros(0, np.intp)
 
+    def attached_ceilings(self, x) -> tuple:
+        """(mesh vertices, ceilings [m]) of the panels with attachments: no higher than their
+        attached vertices at ``x`` (per panel, the highest of them)."""
+        ids, tops = [], []
+        for a in self.pattern.attachments:
+            held = attachment_vertices(self.pattern, self.mesh, a)
+            panel = self.mesh.panel_vertices(self.pattern.panel_index(a.panel))
+            ids.append(panel)
+            tops.append(np.full(len(panel), x[held, 2].max()))
+        return (np.concatenate(ids), np.concatenate(tops)) if ids else (np.zeros(0, np.intp), np.zeros(0))
+
     def attach(self, state, collider, pose):
         """Gravity on, the pattern's attachments pinned where they lie on the body (Eq. 19–20).
 

@@ -41,7 +41,7 @@ class Dressing:
                  on_frame=None, progress=None):
         self.options, self.garment, self.timeline, self.contacts = options, garment, timeline, contacts
         self.walls, self.attachments = walls, None
-        self.held_heights = None  # (mesh vertices, heights [m]) of the attachments while sewing
+        self.held_heights = None  # (mesh vertices, heights [m], under, ceilings [m]) of the attachments while sewing
         self.integrator, self.quality = integrator, quality
         self.stepper = Stepper(integrator, contacts=contacts)
         self.on_frame, self.progress = on_frame, progress
@@ -59,7 +59,10 @@ class Dressing:
         (while sewing, their heights)."""
         g = self.garment
         walls = LimbWallContact(self.walls, g.mesh, g.weld, g.thickness) if self.walls is not None and self.walls.count else None
-        held = HeightHold(*self.held_heights, g.weld) if self.held_heights is not None else None
+        held = None
+        if self.held_heights is not None:
+            ids, heights, under, ceilings = self.held_heights
+            held = HeightHold(ids, heights, g.weld, under, ceilings)
         self.contacts.constrain(walls, self.attachments, held)
 
     @property
@@ -146,7 +149,7 @@ def sew(d: Dressing, x0):
     g, sewing = d.garment, d.garment.sewing
     state = g.model.state(x0)
     if len(g.attached):
-        d.held_heights = (g.attached, x0[g.attached, 2])
+        d.held_heights = (g.attached, x0[g.attached, 2], *g.attached_ceilings(x0))
         d.constrain()
     frames, total = 0, 0.0
     merge_distance = sewing.merge_distance
