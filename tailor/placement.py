@@ -9,6 +9,7 @@ Two kinds of placement come from the pattern:
   outside facing out. Rolling onto a cylinder bends the panel without straining it; a panel whose
   widest row exceeds its share of the circumference (a flared skirt) is rolled on a wider
   cylinder, so panels never overlap: with n panels at one landmark at n different angles, each spans at most 360°/n.
+  A flared panel round a circular waist arc (a circle skirt's) is laid on a cone instead (:func:`_cone`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .curves import arc_center, sample_curve
 from .errors import PatternError
 from .pattern import LandmarkPlacement, TransformPlacement
 
@@ -107,6 +109,107 @@ def _wrap(uv, anchor, lm, placement, share, inside=None):
     for k in range(bands - 2, -1, -1):
         f[k] = max(f[k], f[k + 1] - step)
     return place(grow * f[band])[0]
+
+
+CONE_SLOPE_STEP = 0.1
+"""Steps of the outward run per unit of slant (the sine of the cone's half-angle) tried, from the
+isometric one down, until a flared panel's cone clears the body (the hands, the legs)."""
+
+
+def _waist_arc(panel, anchor):
+    """(centre, radius) of the panel's circular edge through ``anchor`` when the panel lies outside
+    that circle (a circle or half-circle skirt round its waist arc), else None."""
+    for edge in panel.edges:
+        c = edge.curve
+        if c.kind != "circle":
+            continue
+        centre = arc_center(c.start, c.end, c.radius, c.large_arc, c.sweep)[0]
+        r = max(c.radius, 0.5 * float(np.linalg.norm(c.end - c.start)))
+        if abs(np.linalg.norm(anchor - centre) - r) > 1e-3:
+            continue
+        outline = np.concatenate([sample_curve(e.curve, np.linspace(0.0, 1.0, 33)) for e in panel.edges])
+        if (np.linalg.norm(outline - centre, axis=1) > r - 1e-3).all():
+            return centre, r
+    return None
+
+
+class _Cone:
+    """Cones round a landmark for a flared panel (:func:`_cone`): panel points in polar coordinates
+    about its waist arc's centre, the arc laid along the landmark's ellipse at the clearance (arc
+    length kept, the ellipse scaled so the arc fills the panel's share), each ray running down and
+    out from it."""
+
+    def __init__(self, uv, anchor, arc, lm, placement, share):
+        self.axis, front, left = _frame(lm)
+        self.centre, self.r0 = arc
+        self.ta = math.atan2(*(anchor - self.centre)[::-1])
+        self.span = float(np.ptp(self._polar(uv)[1]))
+        a0, b0 = 0.5 * lm.width, 0.5 * lm.depth
+        a, b = a0 + placement.clearance, b0 + placement.clearance
+        perimeter = math.pi * (3 * (a + b) - math.sqrt((3 * a + b) * (a + 3 * b)))
+        q = max(0.97 * self.r0 * self.span / (share * perimeter), (a0 + 0.5 * placement.clearance) / a)
+        self.a, self.b, self.front, self.left = q * a, q * b, front, left
+        self.phi = np.linspace(0.0, 2.0 * math.pi, 721)
+        unit = np.column_stack([self.a * np.sin(self.phi), self.b * np.cos(self.phi)])
+        self.arc_len = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(unit, axis=0).T))])
+        self.s0 = np.interp(placement.angle % (2.0 * math.pi), self.phi, self.arc_len)
+        tangent = np.array([-(anchor - self.centre)[1], (anchor - self.centre)[0]])
+        self.sign = 1.0 if tangent[0] >= 0 else -1.0  # arc length along the waist grows with the panel's +x
+        self.base = np.asarray(lm.center) + placement.offset * self.axis
+        self.down = -1.0 if uv[:, 1].mean() < anchor[1] else 1.0
+
+    def _polar(self, uv):
+        rel = uv - self.centre
+        dtheta = (np.arctan2(rel[:, 1], rel[:, 0]) - self.ta + math.pi) % (2.0 * math.pi) - math.pi
+        return np.linalg.norm(rel, axis=1), dtheta
+
+    def at(self, uv, slope: float):
+        """(points (N, 3), outward directions (N, 3), slant (N,)) of ``uv`` on the cone of ``slope``."""
+        rho, dtheta = self._polar(uv)
+        ang = np.interp((self.s0 + self.sign * self.r0 * dtheta) % self.arc_len[-1], self.arc_len, self.phi)
+        # out from the axis, not along the ellipse's normal: the normals of a wide ellipse fan out at
+        # its sides and would stretch the cloth there by a third
+        radial = (self.a * np.sin(ang))[:, None] * self.left + (self.b * np.cos(ang))[:, None] * self.front
+        out = radial / np.linalg.norm(radial, axis=1, keepdims=True)
+        waist = self.base + radial
+        slant = rho - self.r0
+        x = waist + (slant * slope)[:, None] * out + np.outer(self.down * slant * math.sqrt(1.0 - slope * slope), self.axis)
+        return x, out, slant
+
+    def probe(self, uv, step: float = 0.01):
+        """Points every ``step`` [m] over the panel's polar extent (finer than its mesh) and a tenth
+        beyond each side: where the seams to its neighbours will close."""
+        rho, dtheta = self._polar(uv)
+        rings = np.arange(self.r0, rho.max() + step, step)
+        lo, hi = dtheta.min() - 0.1 * self.span, dtheta.max() + 0.1 * self.span
+        pts = [np.column_stack([r * np.cos(t), r * np.sin(t)])
+               for r in rings for t in [self.ta + np.arange(lo, hi, step / r)]]
+        return self.centre + np.concatenate(pts)
+
+
+def _cone(uv, anchor, arc, lm, placement, share, inside=None):
+    """A flared panel (a circle or half-circle skirt) laid on a cone round the landmark (:class:`_Cone`).
+
+    Rolling such a panel row by row puts its straight side seams, horizontal in the pattern, along
+    the waist, 40–50 cm from the body; on the cone they run down its sides, where the next panel's
+    meet them. A panel spanning Θ round its arc's centre, laid round its share of the body, lies on
+    the cone of slope (sine of the half-angle) Θ / (2π·share) without strain: a full circle skirt
+    flat, a half circle at 30°. That one is taken if it clears the body (the forearms, the hands,
+    the legs) by half the clearance, tested every centimetre over the panel; else each steeper one
+    in turn, compressing the cloth round the cone, which buckles into the folds it hangs in anyway.
+    None for a panel hardly flared (a slope under two steps): it is rolled (:func:`_wrap`).
+    """
+    cone = _Cone(uv, anchor, arc, lm, placement, share)
+    iso = min(1.0, cone.span / (2.0 * math.pi * share))
+    if iso < 2.0 * CONE_SLOPE_STEP:
+        return None  # hardly flared: rolled as it is
+    probe = cone.probe(uv)
+    for slope in np.arange(iso, 0.05, -CONE_SLOPE_STEP):
+        p, out, slant = cone.at(probe, slope)
+        below = slant > 0.05
+        if inside is None or not inside(p[below] - 0.5 * placement.clearance * out[below]).any():
+            break
+    return cone.at(uv, slope)[0]
 
 
 def _clear_rigid(x, placement, inside, body_axis, clearance=0.01, reach=0.3):
@@ -217,7 +320,9 @@ def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
         lo, hi = uv.min(axis=0), uv.max(axis=0)
         anchor = np.array(pl.anchor) if pl.anchor is not None else np.array([0.5 * (lo[0] + hi[0]), hi[1]])
         share = 1.0 / counts[(pieces[pi].name, pl.landmark)]
-        x[ids] = _wrap(uv, anchor, lm, pl, share, inside)
+        arc = _waist_arc(panel, anchor) if lm.width > 0 and lm.depth > 0 else None
+        coned = _cone(uv, anchor, arc, lm, pl, share, inside) if arc is not None else None
+        x[ids] = coned if coned is not None else _wrap(uv, anchor, lm, pl, share, inside)
     return x
 
 

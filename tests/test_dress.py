@@ -145,7 +145,8 @@ def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
 @pytest.mark.parametrize("garment, resolution, frames", [
     ("dress", 0.04, 3), ("circle_skirt", 0.04, 3),
     pytest.param("dress", 0.02, 50, marks=pytest.mark.slow), pytest.param("tshirt", 0.02, 50, marks=pytest.mark.slow),
-    pytest.param("skirt", 0.02, 50, marks=pytest.mark.slow), pytest.param("trousers", 0.02, 50, marks=pytest.mark.slow)])
+    pytest.param("skirt", 0.02, 50, marks=pytest.mark.slow), pytest.param("trousers", 0.02, 50, marks=pytest.mark.slow),
+    pytest.param("circle_skirt", 0.02, 50, marks=pytest.mark.slow)])
 def test_walking_garments_do_not_pass_through_themselves(garment, resolution, frames):
     """Every frame written is free of edges through the garment's own triangles (the check a renderer
     trips on), untangled where sewing or the walk made some, and nothing enters the body. Without

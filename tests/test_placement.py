@@ -8,6 +8,7 @@ import trimesh
 
 from tailor import find_landmarks, read_pattern
 from tailor.collide import BodyCollider, points_inside
+from tailor.collide.crossings import edge_crossings
 from tailor.mesh import discretise
 from tailor.placement import limb_walls, place_panels
 
@@ -119,3 +120,23 @@ def test_rigidly_placed_trouser_legs_get_their_side_s_wall_and_a_skirt_panel_non
     assert normal[wall["leg_l"]] @ [1, 0, 0] > 0.99 and normal[wall["leg_r"]] @ [1, 0, 0] < -0.99  # left = +X
     assert wall["inseam_across"] == -1 and wall["skirt"] == -1  # 3 cm across: not one leg's
     assert (limb_walls(pattern, marks).panel == -1).all()  # without the placed points, only landmark placements
+
+
+def test_a_circle_skirt_is_laid_on_a_cone_its_side_seams_together_clear_of_the_hands(mannequin):
+    """Rolled row by row, a half-annulus's straight side seams (horizontal in the pattern) lay along
+    the waist, gaps up to 77 cm apart, and the skirt sewed into a knot. On the cone round its waist
+    arc they run down the sides together; the slope is the flattest that clears the body, the
+    forearms at the sides included (a flat disc, the strain-free one for a full circle, cuts them)."""
+    pattern = read_pattern(PANELS / "circle_skirt.json")
+    mesh = discretise(pattern, 0.03)
+    marks = find_landmarks(mannequin.vertices, mannequin.faces)
+    x = place_panels(pattern, mesh, marks, inside=lambda p: points_inside(p, mannequin.vertices, mannequin.faces))
+    front = mesh.panel_vertices(pattern.panel_index("skirt_front"))
+    waist = marks["waist"].height
+    assert x[front, 2].max() < waist and x[front, 2].min() < waist - 0.15  # down and out from the waist
+    side = mesh.seam_pairs[np.isin(mesh.seam_pair_seam, [0, 1])]
+    assert np.linalg.norm(x[side[:, 0]] - x[side[:, 1]], axis=1).max() < 0.25
+    assert not points_inside(x, mannequin.vertices, mannequin.faces).any()
+    assert len(edge_crossings(x, mesh.faces)) == 0  # panels not through each other (nor the band)
+    ratio = _edge_ratios(mesh, x)
+    assert ratio.min() > 0.7 and ratio.max() < 1.12  # compressed round the cone (a wider one would cut the hands)
