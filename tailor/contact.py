@@ -218,18 +218,19 @@ class ContactLoads:
 
 
 def _joined(a: Contacts, b: Contacts) -> Contacts:
-    """``a`` and those of ``b`` on other vertices, one :class:`Contacts`."""
+    """``a`` and those of ``b`` on other vertices, one :class:`Contacts` (unset options at their defaults)."""
     keep = ~np.isin(b.ids, a.ids)
 
-    def part(c, name, default):
-        value = getattr(c, name)
-        return np.asarray(value) if value is not None else default(len(c.ids))
+    def both(x, y, default):
+        x = default(len(a.ids)) if x is None else np.asarray(x)
+        y = default(len(b.ids)) if y is None else np.asarray(y)
+        return np.concatenate([x, y[keep]])
 
-    fields = {"stick": lambda n: np.zeros(n, np.uint8), "body_velocity": lambda n: np.zeros((n, 3)),
-              "friction": lambda n: np.full(n, np.inf)}
-    extra = {k: np.concatenate([part(a, k, f), part(b, k, f)[keep]]) for k, f in fields.items()}
-    return Contacts(np.concatenate([a.ids, b.ids[keep]]), np.concatenate([a.normals, b.normals[keep]]),
-                    np.concatenate([a.normal_velocity, b.normal_velocity[keep]]), a.vertex_count, **extra)
+    return Contacts(both(a.ids, b.ids, None), both(a.normals, b.normals, None),
+                    both(a.normal_velocity, b.normal_velocity, None), a.vertex_count,
+                    stick=both(a.stick, b.stick, lambda n: np.zeros(n, np.uint8)),
+                    body_velocity=both(a.body_velocity, b.body_velocity, lambda n: np.zeros((n, 3))),
+                    friction=both(a.friction, b.friction, lambda n: np.full(n, np.inf)))
 
 
 class ContactPipeline:
