@@ -94,10 +94,6 @@ class Attachments:
         state.x[self.ids] = p + self.offset[:, None] * n
         state.v[self.ids] = (body_v[f] * self.bary[:, :, None]).sum(axis=1)
 
-    def contacts(self, model) -> None:
-        """Nothing for the solve to hold: attached vertices are pinned in the model."""
-        return None
-
     def renumbered(self, inverse) -> "Attachments":
         """The same attachments after a renumbering (``inverse``: old vertex → new, −1 gone)."""
         ids = inverse[self.ids]
@@ -125,13 +121,6 @@ class HeightHold:
         self.under = np.unique(under)
         self.ceilings = np.full(len(self.under), np.inf)
         np.minimum.at(self.ceilings, np.searchsorted(self.under, under), np.asarray(ceilings, float))
-
-    def contacts(self, model) -> Contacts:
-        """The held vertices' heights as constraints of the implicit solve (no vertical velocity):
-        projected back only after the step, a band's top would be yanked up each step from where the
-        solve had let the skirt's seams pull it, stretching the band between its rows."""
-        n = len(self.ids)
-        return Contacts(self.ids, np.tile([0.0, 0.0, 1.0], (n, 1)), np.zeros(n), model.vertex_count)
 
     def apply(self, state, body_x, body_v) -> None:
         z = state.x[self.under, 2]
@@ -161,10 +150,6 @@ class LimbWallContact:
         np.maximum.at(hi, weld, of)
         self.ids = np.flatnonzero((lo == hi) & (hi >= 0))
         self.which = hi[self.ids]
-
-    def contacts(self, model) -> None:
-        """Nothing for the solve to hold: the walls act after each step."""
-        return None
 
     def apply(self, state, body_x, body_v) -> None:
         if not len(self.ids):
@@ -215,22 +200,6 @@ class ContactLoads:
         if body is None or len(body) != n or elapsed <= 0:
             return np.zeros((n, 3)), np.zeros((n, 3))
         return body / elapsed, attached / elapsed
-
-
-def _joined(a: Contacts, b: Contacts) -> Contacts:
-    """``a`` and those of ``b`` on other vertices, one :class:`Contacts` (unset options at their defaults)."""
-    keep = ~np.isin(b.ids, a.ids)
-
-    def both(x, y, default):
-        x = default(len(a.ids)) if x is None else np.asarray(x)
-        y = default(len(b.ids)) if y is None else np.asarray(y)
-        return np.concatenate([x, y[keep]])
-
-    return Contacts(both(a.ids, b.ids, None), both(a.normals, b.normals, None),
-                    both(a.normal_velocity, b.normal_velocity, None), a.vertex_count,
-                    stick=both(a.stick, b.stick, lambda n: np.zeros(n, np.uint8)),
-                    body_velocity=both(a.body_velocity, b.body_velocity, lambda n: np.zeros((n, 3))),
-                    friction=both(a.friction, b.friction, lambda n: np.full(n, np.inf)))
 
 
 class ContactPipeline:
@@ -295,15 +264,9 @@ class ContactPipeline:
         return self.body.landing(model, x_end, v_end, dt, bx, bv, k, thickness=self.thickness, skip=held)
 
     def hold(self, model) -> Contacts | None:
-        """The contacts the next step on ``model`` should hold: the body's the last response left
-        resting, and the constraints' (:meth:`HeightHold.contacts`)."""
+        """The body contacts the next step on ``model`` should hold (those the last response left resting)."""
         p = self.pending
-        held = p if p is not None and p.vertex_count == model.vertex_count else None
-        for constraint in self.constraints:
-            more = constraint.contacts(model)
-            if more is not None and len(more):
-                held = more if held is None else _joined(held, more)
-        return held
+        return p if p is not None and p.vertex_count == model.vertex_count else None
 
     def respond(self, model, state, dt: float, impulses=None, support=None) -> None:
         """Every contact of ``state`` after a step, in place; ``impulses`` the step's held-contact
