@@ -126,11 +126,8 @@ class Sewing:
             return out
         d = state.x[j] - state.x[i]
         to_i, to_j = d.copy(), -d  # twice the way to the meeting point
-        far = np.flatnonzero(self.stuck[now][keep] & (np.einsum("ij,ij->i", d, d) > self.meeting_beyond ** 2))
-        if self.meeting is not None and len(far):
-            ids, met = self.meeting(0.5 * (state.x[i[far]] + state.x[j[far]]))
-            ids = far[ids]
-            to_i[ids], to_j[ids] = 2.0 * (met - state.x[i[ids]]), 2.0 * (met - state.x[j[ids]])
+        if self.meeting is not None:
+            self._route(state.x, i, j, d, self.stuck[now][keep], to_i, to_j)
         damp = 2.0 * np.sqrt(2.0 * self.rate) * (state.v[j] - state.v[i])  # critically damped closing
         m = model.vertex_mass
         for ends, accel in ((i, self.rate * to_i + damp), (j, self.rate * to_j - damp)):
@@ -139,6 +136,16 @@ class Sewing:
             for k in range(3):
                 out[:, k] += np.bincount(ends, m[ends] * accel[:, k], minlength=len(out))
         return out
+
+    def _route(self, x, i, j, d, stuck, to_i, to_j) -> None:
+        """Point the stuck far pairs (ends ``i``, ``j``, gaps ``d``) whose midpoint is inside the body
+        at their :attr:`meeting` point, in place in ``to_i``, ``to_j``."""
+        far = np.flatnonzero(stuck & (np.einsum("ij,ij->i", d, d) > self.meeting_beyond ** 2))
+        if not len(far):
+            return
+        ids, met = self.meeting(0.5 * (x[i[far]] + x[j[far]]))
+        ids = far[ids]
+        to_i[ids], to_j[ids] = 2.0 * (met - x[i[ids]]), 2.0 * (met - x[j[ids]])
 
     def open_pairs(self, weld) -> np.ndarray:
         """Open pairs sewing now, in welded indices (a pair already joined through others is dropped), (P, 2)."""

@@ -148,8 +148,9 @@ def sew(d: Dressing, x0):
     d.enter(SEWING)
     g, sewing = d.garment, d.garment.sewing
     state = g.model.state(x0)
-    if len(g.attached):
-        d.held_heights = (g.attached, x0[g.attached, 2], *g.attached_ceilings(x0))
+    attached = g.attached
+    if len(attached):
+        d.held_heights = (attached, x0[attached, 2], *g.attached_ceilings(x0))
         d.constrain()
     frames, total = 0, 0.0
     merge_distance = sewing.merge_distance
