@@ -12,7 +12,8 @@ from tailor import read_body, read_pattern
 from tailor.body import Body
 from tailor.cli import main
 from tailor.dress import DrapeOptions, drape, prepare
-from tailor.dress.phases import animate, settle, sew, transition
+from tailor.dress.options import REST_FRAMES, REST_SPEED, TRANSITION_SPEED
+from tailor.dress.phases import animate, rms_speed, settle, sew, transition
 from tailor.errors import SimulationError
 from tailor.integrators import INTEGRATORS
 from tailor.tearing import Cut
@@ -76,6 +77,20 @@ def test_settling_alone_hangs_the_sewn_garment_under_gravity(skirt_dressing, set
     assert d.motion_limit >= 5.0
 
 
+def test_settling_ends_once_the_garment_is_at_rest(mannequin):
+    """Given 3 s, a sewn skirt settles until it is still (its rms speed under REST_SPEED for
+    REST_FRAMES frames in a row) and stops there, not at 3 s."""
+    pattern = read_pattern(PANELS / "skirt.json")
+    d, _, x0 = prepare(pattern, mannequin, DrapeOptions(resolution=0.08, frames=1, settle=3.0))
+    state, report = settle(d, sew(d, x0)[0])
+    assert REST_FRAMES <= report.frames < 3.0 * d.options.fps
+    assert report.simulated_s == pytest.approx(report.frames / d.options.fps)
+    assert rms_speed(d.garment.model, state) < REST_SPEED
+    m = d.garment.model.vertex_mass
+    kinetic = 0.5 * (m * (state.v ** 2).sum(axis=1)).sum()
+    assert rms_speed(d.garment.model, state) == pytest.approx(np.sqrt(2 * kinetic / m.sum()))
+
+
 def test_transition_and_motion_alone_on_a_still_body(skirt_dressing, settled):
     pattern, (d, _, _) = skirt_dressing
     state, report = transition(d, settled[1][0])
@@ -92,7 +107,11 @@ def test_a_walking_body_is_eased_from_its_rest_pose_into_its_first_frame():
     tl = d.timeline
     assert tl.keys and np.array_equal(tl.at(0.0)[0], body.rest)  # dressed in the rest pose
     tl.start_transition(1.0)
-    assert np.allclose(tl.at(1.5)[0], 0.5 * (body.rest + body.frames[0]))
+    assert np.allclose(tl.at(1.0 + 0.5 * tl.transition_s)[0], 0.5 * (body.rest + body.frames[0]))
+    # the point that moves farthest (a hand, 27 cm) does so at the transition's speed, not faster
+    farthest = float(np.linalg.norm(body.frames[0] - body.rest, axis=1).max())
+    assert np.isclose(np.linalg.norm(tl.at(1.1)[1], axis=1).max(), farthest / tl.transition_s)
+    assert farthest / tl.transition_s <= TRANSITION_SPEED + 1e-9 and 0.2 <= tl.transition_s <= 1.0
     tl.start_motion(2.0)
     x, v, k = tl.at(2.0)
     assert np.allclose(x, body.frames[0]) and k == tl.keys + 1  # collider frame of the motion's first pose

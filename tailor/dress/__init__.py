@@ -58,7 +58,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
         - ``frames`` (25): frames to produce after the garment is dressed (frame 0 included);
         - ``fps`` (25); ``resolution``: mesh edge length [m] (:data:`DRAPE_RESOLUTION`, 2 cm);
         - ``integrator`` ("implicit"): see :mod:`tailor.integrators`;
-        - ``sew_timeout`` (4 s), ``settle`` (1 s);
+        - ``sew_timeout`` (4 s), ``settle`` (at most 1 s: settling ends once the garment is still);
         - ``record_sewing``: also return the sewing and settling as frames (before frame 0);
         - ``self_collision`` ("auto"): cloth–cloth contact from the moment the garment is sewn;
           ``auto`` checks only the regions that can touch themselves, ``on``, ``off``;

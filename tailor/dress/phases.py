@@ -15,6 +15,8 @@ Each returns the state it ends with and its :class:`~.report.PhaseReport`.
 
 from __future__ import annotations
 
+import logging
+import math
 import time
 
 import numpy as np
@@ -23,11 +25,13 @@ from ..contact import HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..sim import Guard, Stepper, max_stretch
-from .options import (ROUTE_AFTER, ROUTE_BEYOND, MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
-                      STRAGGLERS, TRANSITION, TRANSITION_S, MOTION, DrapeOptions, PhaseSettings)
+from .options import (REST_FRAMES, REST_SPEED, ROUTE_AFTER, ROUTE_BEYOND, MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
+                      STRAGGLERS, TRANSITION, MOTION, DrapeOptions, PhaseSettings)
 from .report import DrapeProgress, PhaseReport
 
-__all__ = ["Dressing", "sew", "settle", "transition", "animate"]
+__all__ = ["Dressing", "sew", "settle", "transition", "animate", "rms_speed"]
+
+log = logging.getLogger(__name__)
 
 
 class Dressing:
@@ -208,22 +212,33 @@ def _open_seams(garment, state, timeout: float) -> str:
 
 
 def settle(d: Dressing, state):
-    """Phase 2: gravity on, the attachments pinned, the garment comes to rest for ``settle`` s."""
+    """Phase 2: gravity on, the attachments pinned, the garment comes to rest: for ``settle`` s at
+    most, ending early once it is still (:data:`~.options.REST_SPEED`)."""
     t0 = time.perf_counter()
     state, d.attachments = d.garment.attach(state, d.contacts.body, d.timeline.pose)
     d.held_heights = None
     d.contacts.follow(d.garment.friction)
     d.constrain()
     d.enter(SETTLING)
-    count = int(round(d.options.settle * d.options.fps))
-    for i in range(count):
+    count, still, done = int(round(d.options.settle * d.options.fps)), 0, 0
+    while done < count and still < REST_FRAMES:
         state = d.advance(state, d.frame_dt)
         d.contacts.untangle(d.garment.model, state)
         if d.options.record_sewing:
             d.emit(state, d.timeline.pose)
-        d.tell(i + 1, count, state)
+        done += 1
+        speed = rms_speed(d.garment.model, state)
+        log.debug("settling frame %d: rms speed %.4f m/s", done, speed)
+        still = still + 1 if speed < REST_SPEED else 0
+        d.tell(count if still >= REST_FRAMES else done, count, state)
     d.motion_limit = max(MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH * max_stretch(d.garment.model, state.x))
-    return state, PhaseReport(d.options.settle, time.perf_counter() - t0)
+    return state, PhaseReport(done * d.frame_dt, time.perf_counter() - t0, done)
+
+
+def rms_speed(model, state) -> float:
+    """The garment's root-mean-square speed [m/s], weighted by mass: √(2·kinetic energy / mass)."""
+    m = model.vertex_mass
+    return float(np.sqrt((m * (state.v * state.v).sum(axis=1)).sum() / max(m.sum(), 1e-30)))
 
 
 def transition(d: Dressing, state):
@@ -233,14 +248,14 @@ def transition(d: Dressing, state):
     d.enter(TRANSITION)
     if not d.timeline.keys:
         return state, None
-    count = int(round(TRANSITION_S * d.options.fps))
+    count = int(math.ceil(d.timeline.transition_s * d.options.fps - 1e-9))
     for i in range(count):
         state = d.advance(state, d.frame_dt)
         d.contacts.untangle(d.garment.model, state)
         if d.options.record_sewing:
             d.emit(state, d.timeline.at(state.t)[0])
         d.tell(i + 1, count, state)
-    return state, PhaseReport(TRANSITION_S, time.perf_counter() - t0)
+    return state, PhaseReport(count * d.frame_dt, time.perf_counter() - t0)
 
 
 def animate(d: Dressing, state):

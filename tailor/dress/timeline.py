@@ -2,8 +2,8 @@
 step its motion allows.
 
 A moving body with a neutral pose (:attr:`~tailor.body.Body.rest`, as the shipped walk has) is
-dressed in that pose and then moves into its first frame in :data:`~.options.TRANSITION_S`
-seconds (along :data:`~.options.TRANSITION_KEYS` key poses), so panels are never placed round a
+dressed in that pose and then moves into its first frame at :data:`~.options.TRANSITION_SPEED`
+(along key poses :data:`~.options.TRANSITION_KEYS_PER_S` a second), so panels are never placed round a
 leg in mid-stride. Each step while the body moves carries no body point that can reach the cloth
 within the frame more than half the contact margin (the feet do not shorten a T-shirt's steps).
 """
@@ -15,7 +15,7 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .options import TRANSITION_KEYS, TRANSITION_S
+from .options import TRANSITION_KEYS_PER_S, transition_seconds
 
 __all__ = ["Timeline", "NearBodySpeed"]
 
@@ -30,10 +30,10 @@ class NearBodySpeed:
     reaches that far from its corners); the others do not limit the step.
     """
 
-    def __init__(self, body, pose, margin: float):
+    def __init__(self, body, pose, margin: float, transition_s: float = 1.0):
         f = np.asarray(body.frames, dtype=np.float64)
         self.speeds = np.linalg.norm(np.roll(f, -1, axis=0) - f, axis=2) * body.fps if len(f) > 1 else None
-        self.ease = None if pose is None else np.linalg.norm(f[0] - pose, axis=1) / TRANSITION_S
+        self.ease = None if pose is None else np.linalg.norm(f[0] - pose, axis=1) / transition_s
         faces = np.asarray(body.faces)
         self.edge = float(np.linalg.norm(f[0][faces] - f[0][np.roll(faces, 1, axis=1)], axis=2).max())
         self.fps, self.margin = body.fps, margin
@@ -72,7 +72,9 @@ class Timeline:
         self.moving = body.frame_count > 1
         has_rest = self.moving and body.rest is not None
         self.pose = body.rest if has_rest else body.frames[0]
-        self.keys = TRANSITION_KEYS if has_rest else 0
+        self.transition_s = transition_seconds(float(np.linalg.norm(body.frames[0] - self.pose, axis=1).max())) if has_rest else 0.0
+        """Seconds the body takes from its rest pose into its motion's first frame (0: none)."""
+        self.keys = max(1, int(round(TRANSITION_KEYS_PER_S * self.transition_s))) if has_rest else 0
         self.transition_start = None  # [s] of the drape's clock, set when the body starts to move
         self.motion_start = None
         self.still_step = still_step
@@ -102,7 +104,7 @@ class Timeline:
         """The collider's margin is known: the step rule of a moving body uses it."""
         self.margin = margin
         if self.moving:
-            self._near = NearBodySpeed(self.body, self.pose if self.keys else None, margin)
+            self._near = NearBodySpeed(self.body, self.pose if self.keys else None, margin, self.transition_s or 1.0)
 
     def at(self, t: float):
         """Body positions, velocities and collider frame at time ``t`` of the drape."""
@@ -110,8 +112,8 @@ class Timeline:
         if ease is None or (start is None and not self.keys):
             return self.pose, np.zeros_like(self.pose), 0
         if start is None:  # transition: rest pose → first frame at constant speed
-            a = min(max((t - ease) / TRANSITION_S, 0.0), 1.0)
-            return (self.pose + a * (body.frames[0] - self.pose), (body.frames[0] - self.pose) / TRANSITION_S,
+            a = min(max((t - ease) / self.transition_s, 0.0), 1.0)
+            return (self.pose + a * (body.frames[0] - self.pose), (body.frames[0] - self.pose) / self.transition_s,
                     1 + min(self.keys - 1, int(a * self.keys)))
         if not self.moving:
             return self.pose, np.zeros_like(self.pose), 0
@@ -125,7 +127,7 @@ class Timeline:
             return 0.0
         speed = float(np.abs(np.diff(self.body.frames, axis=0)).max() * self.body.fps)
         if self.keys:
-            speed = max(speed, float(np.abs(self.body.frames[0] - self.pose).max()) / TRANSITION_S)
+            speed = max(speed, float(np.abs(self.body.frames[0] - self.pose).max()) / self.transition_s)
         return speed
 
     @property

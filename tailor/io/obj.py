@@ -47,9 +47,9 @@ def obj_text(x, faces, *, uv=None, face_uv=None, face_group=None, group_names=No
         out.write("".join(f"# {line}\n" for line in header.splitlines()))
     if mtl:
         out.write(f"mtllib {mtl}\n")
-    np.savetxt(out, x, fmt="v %.7g %.7g %.7g")
+    out.write(_rows("v %.7g %.7g %.7g", x))
     if uv is not None:
-        np.savetxt(out, np.asarray(uv, dtype=float), fmt="vt %.7g %.7g")
+        out.write(_rows("vt %.7g %.7g", np.asarray(uv, dtype=float)))
         fuv = faces if face_uv is None else np.asarray(face_uv)
         corners = np.stack([faces + 1, fuv + 1], axis=2).reshape(len(faces), 6)
         fmt = "f %d/%d %d/%d %d/%d"
@@ -57,7 +57,7 @@ def obj_text(x, faces, *, uv=None, face_uv=None, face_group=None, group_names=No
         corners = faces + 1
         fmt = "f %d %d %d"
     if face_group is None:
-        np.savetxt(out, corners, fmt=fmt)
+        out.write(_rows(fmt, corners))
     else:
         face_group = np.asarray(face_group)
         current = None
@@ -70,8 +70,15 @@ def obj_text(x, faces, *, uv=None, face_uv=None, face_group=None, group_names=No
                 out.write(f"g {name}\n")
                 if mtl:
                     out.write(f"usemtl {name}\n")
-                np.savetxt(out, corners[sel], fmt=fmt)
+                out.write(_rows(fmt, corners[sel]))
     return out.getvalue()
+
+
+def _rows(fmt: str, rows: np.ndarray) -> str:
+    """``rows`` formatted one line each, as ``np.savetxt(fmt=fmt)`` writes them, in one string
+    operation instead of savetxt's line by line."""
+    rows = np.asarray(rows)
+    return ((fmt + "\n") * len(rows)) % tuple(rows.ravel().tolist()) if len(rows) else ""
 
 
 def write_obj(path, x, faces, **kwargs) -> None:
