@@ -65,7 +65,11 @@ def unique_edges(faces) -> np.ndarray:
     f = np.asarray(faces)
     e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
     e.sort(axis=1)
-    return np.unique(e, axis=0)
+    if not len(e):
+        return e.reshape(0, 2)
+    n = int(e.max()) + 1
+    keys = np.unique(e[:, 0].astype(np.int64) * n + e[:, 1])  # one integer per edge: a 1-D sort, not rows
+    return np.column_stack([keys // n, keys % n]).astype(e.dtype, copy=False)
 
 
 def connected_components(vertex_count: int, faces) -> np.ndarray:

@@ -207,3 +207,18 @@ def test_cloth_contact_holds_the_vertices_pinned_now(monkeypatch):
     for m in (model, pinned, model):
         contacts.respond(m, state, 0.01)
     assert seen[0][:2].all() and not seen[1][:2].any() and seen[2][:2].all()
+
+
+def test_patches_sharing_a_vertex_are_found_as_by_brute_force():
+    from itertools import combinations
+
+    from tailor.collide.cloth import _shared_vertex_pairs
+
+    rng = np.random.default_rng(3)
+    faces, patch = rng.integers(0, 40, (90, 3)), rng.integers(0, 7, 90)
+    by_vertex = {}
+    for f, p in zip(faces, patch):
+        for v in f:
+            by_vertex.setdefault(int(v), set()).add(int(p))
+    expected = sorted({i * 7 + j for ps in by_vertex.values() for i, j in combinations(sorted(ps), 2)})
+    assert _shared_vertex_pairs(faces.ravel(), np.repeat(patch, 3), 7).tolist() == expected

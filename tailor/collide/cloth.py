@@ -70,6 +70,21 @@ MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 
 
+def _shared_vertex_pairs(vertex, patch, count: int):
+    """Sorted distinct keys ``i · count + j`` (i < j) of the patches that share a vertex, from each
+    face corner's ``vertex`` and ``patch``: the distinct (vertex, patch) rows sorted by vertex,
+    each row paired with the rows 1, 2, … after it while they are of the same vertex."""
+    key = np.unique(np.asarray(vertex, np.int64) * count + patch)
+    v, p = key // count, key % count
+    keys = []
+    for d in range(1, len(key)):
+        same = np.flatnonzero(v[d:] == v[:-d])
+        if not len(same):
+            break
+        keys.append(p[same] * count + p[same + d])  # sorted by patch within a vertex: p[i] < p[i + d]
+    return np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
+
+
 class SelfCollider:
     """Self-collision of one cloth mesh (module docstring).
 
@@ -110,7 +125,9 @@ class SelfCollider:
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         self._ring_csr = vertex_rings(self.faces, self.n)  # each vertex's neighbours across an edge
         # undirected edges and each face's edges, for edge–edge pairs
-        self._edges, face_edge = np.unique(np.sort(e, axis=1), axis=0, return_inverse=True)
+        e = np.sort(e, axis=1)
+        keys, face_edge = np.unique(e[:, 0] * max(self.n, 1) + e[:, 1], return_inverse=True)  # one integer per edge
+        self._edges = np.column_stack([keys // max(self.n, 1), keys % max(self.n, 1)])
         self._face_edges = face_edge.reshape(-1, 3).astype(np.int64)
         length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
         self._grid_cell = GRID_EDGES * float(np.mean(length)) if len(length) else 1.0
@@ -136,15 +153,7 @@ class SelfCollider:
         self._order = np.argsort(patch, kind="stable")
         self._starts = np.searchsorted(patch[self._order], np.arange(self.patch_count))
         # patches sharing a vertex are neighbours
-        vp = np.column_stack([self.faces.ravel(), np.repeat(patch, 3)])
-        vp = np.unique(vp, axis=0)
-        pairs = []
-        by_vertex = np.split(vp[:, 1], np.flatnonzero(np.diff(vp[:, 0])) + 1)
-        for ps in by_vertex:
-            if len(ps) > 1:
-                i, j = np.triu_indices(len(ps), 1)
-                pairs.append(ps[i] * self.patch_count + ps[j])
-        near = np.unique(np.concatenate(pairs)) if pairs else np.zeros(0, np.int64)
+        near = _shared_vertex_pairs(self.faces.ravel(), np.repeat(patch, 3), self.patch_count)
         # neighbours of neighbours too: patches whose corners merely touch are not a fold either
         a = sp.coo_matrix((np.ones(len(near)), (near // self.patch_count, near % self.patch_count)),
                           shape=(self.patch_count,) * 2).tocsr()
