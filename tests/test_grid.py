@@ -72,3 +72,15 @@ def test_edge_edge_pairs_are_exactly_the_brute_force_ones_each_once(cell):
 def test_a_grid_over_a_vast_extent_keeps_to_its_cell_budget():
     grid = Grid(np.zeros((1, 3)), np.full((1, 3), 100.0), 1e-3)
     assert np.prod(grid.dims) <= 1.05 * MAX_CELLS  # one cell more per axis at most
+
+
+def test_overlapping_boxes_are_the_pairs_brute_force_finds():
+    from tailor.collide.grid import overlapping_boxes
+
+    rng = np.random.default_rng(5)
+    lo = rng.uniform(0, 1, (300, 3))
+    hi = lo + rng.uniform(0, 0.15, (300, 3))
+    i, j = overlapping_boxes(lo, hi)
+    meet = np.all((lo[:, None] <= hi[None]) & (lo[None] <= hi[:, None]), axis=2)
+    expected = {(a, b) for a, b in zip(*np.nonzero(np.triu(meet, 1)))}
+    assert set(zip(i.tolist(), j.tolist())) == expected and len(i) == len(expected) and np.all(i < j)
