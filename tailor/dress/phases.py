@@ -25,7 +25,7 @@ from ..contact import HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..sim import Guard, Stepper, max_stretch
-from .options import (REST_FRAMES, REST_SPEED, ROUTE_AFTER, ROUTE_BEYOND, MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
+from .options import (WELD_BATCH, REST_FRAMES, REST_SPEED, ROUTE_AFTER, ROUTE_BEYOND, MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
                       STRAGGLERS, TRANSITION, MOTION, DrapeOptions, PhaseSettings)
 from .report import DrapeProgress, PhaseReport
 
@@ -164,7 +164,7 @@ def sew(d: Dressing, x0):
             sewing.merge_distance = merge_distance
             d.contacts.follow(g.friction)
             d.constrain()
-        t = 0.0
+        t, unwelded = 0.0, 0  # pairs merged since the last weld (held by their seam springs meanwhile)
         sewing.route_around(None)
         while sewing.sewing_count and t < d.options.sew_timeout:
             state = d.advance(state, d.frame_dt)
@@ -173,8 +173,9 @@ def sew(d: Dressing, x0):
             _widen_merging(sewing, t, d.options)
             if t >= ROUTE_AFTER * d.options.sew_timeout and sewing.meeting is None:  # stuck on the body
                 sewing.route_around(lambda points: _clear_of_body(d, points), beyond=ROUTE_BEYOND)
-            if sewing.close(g.frame(state)):
-                state = d.weld(state)
+            unwelded += sewing.close(g.frame(state))
+            if unwelded and (unwelded >= WELD_BATCH * len(sewing.pairs) or not sewing.sewing_count):
+                state, unwelded = d.weld(state), 0
             if d.options.record_sewing:
                 d.emit(state, d.timeline.pose)
             d.tell(len(sewing.pairs) - sewing.open_count, len(sewing.pairs), state)
