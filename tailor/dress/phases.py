@@ -25,8 +25,9 @@ from ..contact import HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..sim import Guard, Stepper, max_stretch
-from .options import (WELD_BATCH, REST_FRAMES, REST_SPEED, ROUTE_AFTER, ROUTE_BEYOND, MIN_STRAGGLERS, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, SETTLING, SEWING, STRAGGLER_REACH,
-                      STRAGGLERS, TRANSITION, MOTION, DrapeOptions, PhaseSettings)
+from .options import (MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
+                      ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, WELD_BATCH, DrapeOptions,
+                      PhaseSettings)
 from .report import DrapeProgress, PhaseReport
 
 __all__ = ["Dressing", "sew", "settle", "transition", "animate", "rms_speed"]

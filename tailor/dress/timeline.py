@@ -72,8 +72,8 @@ class Timeline:
         self.moving = body.frame_count > 1
         has_rest = self.moving and body.rest is not None
         self.pose = body.rest if has_rest else body.frames[0]
+        # seconds from the rest pose into the motion's first frame (0: no transition)
         self.transition_s = transition_seconds(float(np.linalg.norm(body.frames[0] - self.pose, axis=1).max())) if has_rest else 0.0
-        """Seconds the body takes from its rest pose into its motion's first frame (0: none)."""
         self.keys = max(1, int(round(TRANSITION_KEYS_PER_S * self.transition_s))) if has_rest else 0
         self.transition_start = None  # [s] of the drape's clock, set when the body starts to move
         self.motion_start = None
