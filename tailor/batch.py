@@ -34,6 +34,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from .errors import TailorError
+from .sim import DEFAULT_QUALITY
 
 __all__ = ["Job", "JobTimeout", "read_jobs", "make_jobs", "run_job", "drape_many", "BatchSummary", "MANIFEST_FIELDS",
            "read_manifest", "OPTIONS", "connect", "local_cluster"]
@@ -47,7 +48,7 @@ OPTIONS = {
 """Per-job options and their types; ``resolution`` is in cm (as on the command line), ``timeout``
 in seconds of wall time for the whole job."""
 
-DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": "normal", "integrator": "implicit",
+DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": DEFAULT_QUALITY, "integrator": "implicit",
             "self_collision": "auto", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0}
 
 MANIFEST_FIELDS = ("id", "status", "pattern", "body", "fabric", "wall_s", "cpu_s", "vertices", "welded_vertices", "frames",

@@ -52,7 +52,8 @@ def test_job_files_json_grid_and_csv(tmp_path):
     jobs = read_jobs(_jobs(tmp_path))
     assert len(jobs) == 6 and len({j.id for j in jobs}) == 6
     assert jobs[1].pattern == str((tmp_path / "broken.json").resolve())  # relative to the job file
-    assert jobs[2].options == {"frames": 2, "resolution": 10.0, "quality": "draft"}
+    assert jobs[2].options == {"frames": 2, "resolution": 10.0}  # "draft" is the default: not kept
+    assert jobs[2].option("quality") == "draft"
     assert jobs[3].fabric == "denim" and [j.fabric for j in jobs[4:]] == ["silk", "silk"]  # jobs, then the grid
     csv_file = tmp_path / "jobs.csv"
     csv_file.write_text(f"pattern,body,fabric,frames,with_body\n{PANELS / 'skirt.json'},mannequin-walk,denim,3,yes\n"

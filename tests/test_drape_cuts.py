@@ -54,11 +54,11 @@ def test_a_separating_cut_on_a_sewn_skirt_keeps_its_mass_and_unpicks_a_seam():
     """A cut along a side seam opens the seam: the welded vertices on it split, no triangle goes."""
     pattern = read_pattern(PANELS / "skirt.json")
     body = read_body("mannequin")
-    base = drape(pattern, body, frames=1, resolution=0.04, settle=0.2)
+    base = drape(pattern, body, frames=1, resolution=0.04, settle=0.2, quality="normal")
     seam = base.frames[0][base.mesh.seam_pairs[base.mesh.seam_pair_seam == 0, 0]]  # the first side seam
     seam = seam[np.argsort(seam[:, 2])]
     cut = Cut(0.0, [seam[0] - (0, 0, 0.05), *seam[: len(seam) // 2]], 0.05, separate=True)  # from the hem up
-    result = drape(pattern, body, frames=2, resolution=0.04, settle=0.2, cuts=[cut])
+    result = drape(pattern, body, frames=2, resolution=0.04, settle=0.2, cuts=[cut], quality="normal")
     mesh, weld = result.topology_at(0)
     assert mesh.face_count == base.mesh.face_count and int(weld.max()) > int(base.weld.max())
     assert result.report.tearing["events"][0]["edges"] >= len(seam) // 2 - 1
@@ -74,9 +74,11 @@ def test_the_skirt_tears_only_when_its_fabric_is_weak():
     pattern = read_pattern(PANELS / "skirt.json")
     body = read_body("mannequin")
     cotton = pattern.fabric
-    strong = drape(pattern, body, replace(cotton, tear_strain=0.25), frames=3, resolution=0.04, settle=0.2, tear=True)
+    strong = drape(pattern, body, replace(cotton, tear_strain=0.25), frames=3, resolution=0.04, settle=0.2, tear=True,
+                   quality="normal")
     assert strong.report.tearing["edges_torn"] == 0 and not strong.topology
-    weak = drape(pattern, body, replace(cotton, tear_strain=0.005), frames=3, resolution=0.04, settle=0.2, tear=True)
+    weak = drape(pattern, body, replace(cotton, tear_strain=0.005), frames=3, resolution=0.04, settle=0.2, tear=True,
+                 quality="normal")
     assert weak.report.tearing["edges_torn"] > 0 and weak.topology
     assert all(np.isfinite(f).all() for f in weak.frames)
 

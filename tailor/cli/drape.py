@@ -153,6 +153,7 @@ def add_drape_command(sub) -> None:
     """drape."""
     from ..fabric import fabric_names
     from ..integrators import INTEGRATORS
+    from ..sim import DEFAULT_QUALITY, QUALITY
 
     d = sub.add_parser("drape", help="place, sew and drape a pattern (or an outfit of several) on a body; writes an OBJ per frame")
     d.add_argument("pattern", metavar="PATTERN", nargs="+",
@@ -171,9 +172,10 @@ def add_drape_command(sub) -> None:
     d.add_argument("--fps", type=float, default=25.0)
     d.add_argument("--resolution", type=float, default=2.0, metavar="CM", help="mesh edge length (cm, default 2)")
     d.add_argument("--integrator", default="implicit", choices=list(INTEGRATORS))
-    d.add_argument("--quality", default="normal", choices=["draft", "normal", "final"],
-                   help="speed/accuracy of the implicit step: draft, normal (default: a T-shirt walking 50 frames "
-                        "at 2 cm in 41 s, within 3 mm of final on average) or final (1.7-2x normal's time)")
+    d.add_argument("--quality", default=DEFAULT_QUALITY, choices=list(QUALITY),
+                   help="speed/accuracy of the implicit step: draft (default: the T-shirt, skirt, trousers and dress "
+                        "walking 50 frames at 2 cm end 2.8-4.3 mm from final on average), normal (1.1-1.2x draft's "
+                        "time, 1.3-4.3 mm) or final (2-3x draft's time)")
     d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
     d.add_argument("--self-collision", default="auto", choices=["auto", "on", "off"],
                    help="cloth-cloth contact once the garment is sewn: auto (default) = only where it can "

@@ -62,7 +62,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
         - ``record_sewing``: also return the sewing and settling as frames (before frame 0);
         - ``self_collision`` ("auto"): cloth–cloth contact from the moment the garment is sewn;
           ``auto`` checks only the regions that can touch themselves, ``on``, ``off``;
-        - ``quality`` ("normal"): implicit step and solver tolerance (:data:`tailor.sim.QUALITY`);
+        - ``quality`` (:data:`tailor.sim.DEFAULT_QUALITY`): implicit step and solver tolerance (:data:`tailor.sim.QUALITY`);
           ``normal`` is the knee of the garment frontier (README, "Speed versus accuracy");
         - ``wind``: a :class:`~tailor.forces.wind.Wind` or (3,) air velocity, blowing once sewn;
         - ``cuts``: :class:`~tailor.tearing.Cut` on the dressed garment, ``time`` from frame 0,

@@ -15,7 +15,7 @@ from ..contact import ContactSettings
 from ..errors import SimulationError
 from ..fabric import Fabric, preset
 from ..integrators import INTEGRATORS
-from ..sim import QUALITY
+from ..sim import DEFAULT_QUALITY, QUALITY
 from ..tearing import Cut
 
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
@@ -166,7 +166,7 @@ class DrapeOptions:
     settle: float = 1.0
     record_sewing: bool = False
     self_collision: str = "auto"
-    quality: str = "normal"
+    quality: str = DEFAULT_QUALITY
     wind: object = None
     cuts: tuple = field(default=())
     tear: bool = False
