@@ -6,7 +6,7 @@
 tailor dresses the walking mannequin in ``panels/GARMENT.json`` at each preset (sew, settle, walk
 ``--frames`` frames: the whole ``tailor drape``), timed. Blender's cloth (in a Python that has
 ``bpy``: ``pip install bpy`` in a Python 3.11 venv; skipped with a message when there is none) is
-then given tailor's dressed frame 0 (the ``normal`` preset's) and simulates only the walk: the
+then given tailor's dressed frame 0 (the default preset's) and simulates only the walk: the
 welded garment mesh, quality 5, self-collision on, Blender's Cotton stiffness (tension and
 compression 15, shear 5, bending 0.5), the physical vertex mass (garment mass / vertices), air
 damping 1, the body a collider following the walk through a Mesh Cache modifier (a PC2 file
@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import tailor  # noqa: E402
 from tailor.collide import BodyCollider, edge_crossings  # noqa: E402
 from tailor.io.pc2 import write_pc2  # noqa: E402
-from tailor.sim import QUALITY  # noqa: E402
+from tailor.sim import DEFAULT_QUALITY, QUALITY  # noqa: E402
 
 HERE = Path(__file__).resolve().parents[1]
 
@@ -166,7 +166,7 @@ def main() -> int:
     pattern = tailor.read_pattern(HERE / "panels" / f"{args.garment}.json")
     tailor.drape(pattern, body, resolution=0.08, frames=1)  # compile the kernels before timing
     runs = run_tailor(pattern, body, args)
-    reference = runs.get("normal", next(iter(runs.values())))[1]
+    reference = runs.get(DEFAULT_QUALITY, next(iter(runs.values())))[1]
     last_body = reference.body_frames[-1]
     blender = None
     if has_bpy(args.blender_python):
