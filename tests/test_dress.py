@@ -62,7 +62,9 @@ def test_sewing_alone_closes_every_seam_and_welds(skirt_dressing, sewn):
     state, report = sewn
     g = d.garment
     assert g.sewing.open_count == 0 and g.model.vertex_count < g.mesh.vertex_count
-    assert report.simulated_s < d.options.sew_timeout and report.extra["max_gap_at_merge_m"] <= 0.6 * 0.08
+    # sewn by pulling and welding, not left for the stragglers' rule at ¾ of the time-out
+    assert report.simulated_s < 0.75 * d.options.sew_timeout and report.extra["max_gap_at_merge_m"] <= 0.6 * 0.08
+    assert 1 <= report.extra["rebuilds"] <= report.frames  # welded in batches, at most once a frame
     assert np.isfinite(state.x).all()
 
 

@@ -174,8 +174,9 @@ def sew(d: Dressing, x0):
             _widen_merging(sewing, t, d.options)
             if t >= ROUTE_AFTER * d.options.sew_timeout and sewing.meeting is None:  # stuck on the body
                 sewing.route_around(lambda points: _clear_of_body(d, points), beyond=ROUTE_BEYOND)
-            unwelded += sewing.close(g.frame(state))
-            if unwelded and (unwelded >= WELD_BATCH * len(sewing.pairs) or not sewing.sewing_count):
+            merged = sewing.close(g.frame(state))
+            unwelded += merged
+            if unwelded and (unwelded >= WELD_BATCH * len(sewing.pairs) or not merged or not sewing.sewing_count):
                 state, unwelded = d.weld(state), 0
             if d.options.record_sewing:
                 d.emit(state, d.timeline.pose)
