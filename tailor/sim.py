@@ -61,10 +61,9 @@ garment tests' setting. Speeds against Blender's cloth: docs/measurements.md and
 
 
 DEFAULT_QUALITY = "draft"
-"""The preset garments drape at unless asked otherwise: the cheapest within a few millimetres of
-``final`` on the T-shirt, skirt, trousers and dress walking 50 frames at 2 cm (mean distance of the
-last frame 2.8–4.3 mm against ``normal``'s 1.3–4.3 mm, at 0.8–0.9 of its time;
-``benchmarks/garment_presets.py``, README "Speed versus accuracy")."""
+"""The preset garments drape at unless asked otherwise: the knee of the garment frontier, the
+cheapest preset within a few millimetres of ``final`` on the T-shirt, skirt, trousers and dress
+walking at 2 cm (``benchmarks/garment_presets.py``; the README's "Speed versus accuracy")."""
 
 
 def quality(name: str) -> Quality:

@@ -70,8 +70,7 @@ GRID_EDGES = 2.0
 PATCH_EDGES = 2.5
 """Default patch size of ``auto``, in mean edge lengths of the cloth, and at least :data:`PATCH_MIN`:
 a 10 cm patch of a sleeve (a tube of 5 cm radius) spreads its normals over 115° and takes part,
-though no sleeve touches itself there; at 5 cm, 42 % of a walking T-shirt's faces take part
-instead of 92 % (docs/measurements.md)."""
+though no sleeve touches itself there (docs/measurements.md, "Third speed day")."""
 PATCH_MIN = 0.05
 """See ``PATCH_EDGES`` [m]: smaller patches cost more box pairs than they save."""
 MAX_SUBSTEPS = 16

@@ -79,12 +79,11 @@ REST_FRAMES = 2
 """See ``REST_SPEED``."""
 
 WELD_BATCH = 0.2
-"""Merged seam pairs are welded (the garment's model rebuilt) once this fraction of all pairs has
-merged since the last weld, when a frame merged none (the welded pairs then zip their neighbours
-shut: without that the trousers' last pairs waited for the stragglers' rule, 3 s of sewing instead
-of 0.5 s), or when no pair is left sewing; until then each is held by its stiff seam spring
-(:data:`NEAR_RATE`). A T-shirt's 124 pairs merge over 11 frames: welding at each cost a model, a
-self-collider and a crossing check each time."""
+"""Merged seam pairs are welded (the garment's model rebuilt: the model, the self-collider and a
+crossing check) once this fraction of all pairs has merged since the last weld, when a frame merged
+none (the welded pairs then zip their neighbours shut; held only by springs, the trousers' last
+pairs waited for the stragglers' rule), or when no pair is left sewing. Until then each merged pair
+is held by its stiff seam spring (:data:`NEAR_RATE`). Measured in docs/measurements.md."""
 
 STRAGGLERS = 0.02
 """After ¾ of the sewing time-out, when at most this fraction of pairs (or :data:`MIN_STRAGGLERS`) is
