@@ -31,6 +31,7 @@ class NearBodySpeed:
     """
 
     def __init__(self, body, pose, margin: float, transition_s: float = 1.0):
+        # transition_s [s]: how long the body takes from ``pose`` into its first frame (unused without a pose)
         f = np.asarray(body.frames, dtype=np.float64)
         self.speeds = np.linalg.norm(np.roll(f, -1, axis=0) - f, axis=2) * body.fps if len(f) > 1 else None
         self.ease = None if pose is None else np.linalg.norm(f[0] - pose, axis=1) / transition_s
@@ -104,7 +105,7 @@ class Timeline:
         """The collider's margin is known: the step rule of a moving body uses it."""
         self.margin = margin
         if self.moving:
-            self._near = NearBodySpeed(self.body, self.pose if self.keys else None, margin, self.transition_s or 1.0)
+            self._near = NearBodySpeed(self.body, self.pose if self.keys else None, margin, self.transition_s)
 
     def at(self, t: float):
         """Body positions, velocities and collider frame at time ``t`` of the drape."""
