@@ -27,18 +27,107 @@ MAX_PIECES = 200
 """Most open pieces one cut's outlines are joined from (a holed body has a few)."""
 
 
-def rings(path):
-    """The closed rings of a trimesh section path, open pieces joined end to end across holes.
+def _crossed(z, faces, heights):
+    """Every (face, cut) pair where cut ``heights[k]`` crosses the face: a vertex counts as above a
+    cut at its own height, so a crossed face has vertices strictly below and at or above it, and
+    exactly two crossed edges. Returns the pairs' faces and cuts (``heights`` ascending)."""
+    zf = z[faces]
+    first = np.searchsorted(heights, zf.min(1), "right")
+    count = np.searchsorted(heights, zf.max(1), "right") - first
+    face = np.repeat(np.arange(len(faces)), count)
+    start = np.cumsum(count) - count
+    cut = np.arange(len(face)) - np.repeat(start, count) + np.repeat(first, count)
+    return face, cut
 
-    A mesh with holes cuts into open polylines (trimesh's ``discrete`` leaves them out). Each open
-    piece is extended by the piece whose end is nearest its own end, while that gap is under
-    :data:`GAP` and nearer than its own start; then it is closed. A cut in more than
-    :data:`MAX_PIECES` open pieces is no body's (a triangle soup): only its closed rings count.
+
+def _segments(points, faces, heights, face, cut):
+    """The section segment of each crossed (face, cut): its two ends on the face's crossed edges,
+    as (S, 2, 2) points across the cut's normal and (S, 2) integer keys naming (cut, edge)."""
+    n = len(points)
+    tri = faces[face]
+    a, b = tri, np.roll(tri, -1, axis=1)
+    za, zb = points[a, 2], points[b, 2]
+    h = heights[cut][:, None]
+    crossed = (za >= h) != (zb >= h)
+    pick = np.argsort(~crossed, axis=1, kind="stable")[:, :2]
+    a, b = np.take_along_axis(a, pick, 1), np.take_along_axis(b, pick, 1)
+    za, zb = np.take_along_axis(za, pick, 1), np.take_along_axis(zb, pick, 1)
+    t = ((h - za) / (zb - za))[..., None]
+    ends = points[a, :2] + t * (points[b, :2] - points[a, :2])
+    keys = (cut[:, None] * n + np.minimum(a, b)) * n + np.maximum(a, b)
+    return ends, keys
+
+
+def _partners(keys):
+    """For each segment end (flattened ``keys``), the other end sharing its key, or −1 (an open end,
+    or a key more than two segments share: a non-manifold edge)."""
+    flat = keys.ravel()
+    order = np.argsort(flat, kind="stable")
+    sk = flat[order]
+    same_next = np.append(sk[1:] == sk[:-1], False)
+    same_prev = np.insert(sk[1:] == sk[:-1], 0, False)
+    pair = same_next & ~same_prev & ~np.append(same_next[1:], False)
+    partner = np.full(len(flat), -1)
+    i = np.flatnonzero(pair)
+    partner[order[i]], partner[order[i + 1]] = order[i + 1], order[i]
+    return partner
+
+
+def _walk(partner, start):
+    """Segments chained from segment ``start`` through shared ends: (ends in order, closed?)."""
+    chain, end, seen = [2 * start, 2 * start + 1], 2 * start + 1, {start}
+    while partner[end] >= 0 and partner[end] // 2 not in seen:
+        s = partner[end] // 2
+        seen.add(s)
+        end = 4 * s + 1 - partner[end]  # the segment's other end
+        chain.append(end)
+    closed = partner[end] >= 0 and partner[end] // 2 == start
+    if not closed:  # open: extend backwards from the start too
+        back = 2 * start
+        while partner[back] >= 0 and partner[back] // 2 not in seen:
+            s = partner[back] // 2
+            seen.add(s)
+            back = 4 * s + 1 - partner[back]
+            chain.insert(0, back)
+    return chain, closed, seen
+
+
+def _chains(ends, keys, cut, cut_count):
+    """Per cut, the closed rings and open pieces (arrays of 2D points) the segments chain into."""
+    partner = _partners(keys).tolist()
+    points = ends.reshape(-1, 2)
+    closed = [[] for _ in range(cut_count)]
+    pieces = [[] for _ in range(cut_count)]
+    done = np.zeros(len(keys), bool)
+    for s in range(len(keys)):
+        if done[s]:
+            continue
+        chain, is_closed, seen = _walk(partner, s)
+        done[list(seen)] = True
+        pts = points[chain]
+        keep = np.append(True, np.any(np.abs(np.diff(pts, axis=0)) > 1e-12, axis=1))
+        (closed if is_closed else pieces)[cut[s]].append(pts[keep])
+    return closed, pieces
+
+
+def _sections(points, faces, heights):
+    """Per height (ascending), the rings (closed, open) of the mesh cut by the plane z = height."""
+    faces = np.asarray(faces)
+    face, cut = _crossed(points[:, 2], faces, heights)
+    ends, keys = _segments(points, faces, heights, face, cut)
+    return _chains(ends, keys, cut, len(heights))
+
+
+def rings(closed, pieces):
+    """The closed rings of one cut: ``closed`` as they are, the open ``pieces`` joined end to end
+    across holes.
+
+    A mesh with holes cuts into open polylines. Each open piece is extended by the piece whose end
+    is nearest its own end, while that gap is under :data:`GAP` and nearer than its own start; then
+    it is closed. A cut in more than :data:`MAX_PIECES` open pieces is no body's (a triangle soup):
+    only its closed rings count.
     """
-    closed, pieces = [], []
-    for entity in path.entities:
-        pts = np.asarray(entity.discrete(path.vertices))
-        (closed if entity.closed else pieces).append(pts)
+    closed = list(closed)
     if not pieces or len(pieces) > MAX_PIECES:
         return closed
     heads = np.array([p[0] for p in pieces]).reshape(len(pieces), -1)
@@ -86,12 +175,13 @@ def _polygons(closed):
 
 def horizontal_outlines(vertices, faces, heights):
     """Closed outlines (lists of shapely Polygons, largest first) of the body cut at ``heights`` [m]."""
-    import trimesh
-
-    mesh = trimesh.Trimesh(vertices, faces, process=False)
     heights = np.asarray(heights, float)
-    sections = mesh.section_multiplane(plane_origin=[0.0, 0.0, 0.0], plane_normal=[0.0, 0.0, 1.0], heights=heights)
-    return [_polygons(rings(sec)) if sec is not None else [] for sec in sections]
+    order = np.argsort(heights, kind="stable")
+    closed, pieces = _sections(np.asarray(vertices, float), faces, heights[order])
+    out = [None] * len(heights)
+    for j, k in enumerate(order):
+        out[k] = _polygons(rings(closed[j], pieces[j]))
+    return out
 
 
 def plane_frame(axis):
@@ -108,16 +198,15 @@ def cut_outlines(mesh, point, axis, min_area: float = 1e-6) -> list:
     trimesh ``mesh`` cut by the plane through ``point`` across ``axis``."""
     from shapely.geometry import Polygon
 
-    sec = mesh.section(plane_origin=point, plane_normal=axis)
-    if sec is None:
-        return []
     u, w = plane_frame(axis)
+    rel = np.asarray(mesh.vertices, float) - point
+    local = np.column_stack([rel @ u, rel @ w, rel @ np.asarray(axis, float)])
+    closed, pieces = _sections(local, mesh.faces, np.zeros(1))
     out = []
-    for ring in rings(sec):
+    for ring in rings(closed[0], pieces[0]):
         if len(ring) < 4:
             continue
-        rel = ring - point
-        q = Polygon(np.column_stack([rel @ u, rel @ w]))
+        q = Polygon(ring)
         q = q if q.is_valid else q.buffer(0)
         if q.area > min_area:
             out.append(q)
