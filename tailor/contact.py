@@ -18,7 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, SelfCollider, untangle
+from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, Layers, SelfCollider, untangle
 from .collide.untangle import vertex_rings
 from .errors import SimulationError
 
@@ -55,11 +55,16 @@ class ContactSettings:
     self_collision : bool
         Whether cloth–cloth contact acts (while sewing it leaves the open seams and their
         neighbours free, :meth:`ContactPipeline.respond`: seam edges must be free to meet).
+    layers : bool
+        Whether contact between an outfit's garments keeps their order whatever side they are on
+        (:class:`~tailor.collide.Layers`); off while sewing, where open seams pass through the
+        garments waiting outside and their neighbours follow.
     """
 
     friction_scale: float = 1.0
     hold: bool = True
     self_collision: bool = True
+    layers: bool = True
 
 
 class BodyMotion(Protocol):
@@ -218,14 +223,18 @@ class ContactPipeline:
     self_collision : {"auto", "on", "off"}
     self_margin : float
         Query margin of the self-collision broad phase [m].
+    panel_layer : (P,) int, optional
+        An outfit's garment of each panel, innermost 0: contact between garments keeps their order
+        (:class:`~tailor.collide.Layers`). None for a single garment.
     """
 
     def __init__(self, body: BodyCollider | None, motion: BodyMotion | None, *, thickness: float, friction,
-                 self_collision: str = "off", self_margin: float = 0.01):
+                 self_collision: str = "off", self_margin: float = 0.01, panel_layer=None):
         self.body, self.motion, self.thickness = body, motion, float(thickness)
         self.friction = friction
         self.self_mode = check_self_collision(self_collision)
         self.self_margin = self_margin
+        self.panel_layer = None if panel_layer is None else np.asarray(panel_layer, np.int64)
         self.settings = ContactSettings()
         self.constraints: tuple = ()
         self.pending: Contacts | None = None  # body contacts the next implicit step holds
@@ -284,7 +293,7 @@ class ContactPipeline:
             response = (state.v - v0) * np.asarray(model.vertex_mass)[:, None]
         self.loads.add(model, dt, support, response)
         if self.self_mode != "off" and self.settings.self_collision:
-            collider = self.self_collider(model, state.x)
+            collider = self.self_collider(model, state.x, bx)
             collider.ignore(self._open_seams(model))
             # pinned (attached, or an outfit's garment waiting to sew) vertices do not move: read each
             # step, since pins change without the vertex count changing
@@ -312,14 +321,20 @@ class ContactPipeline:
             self._rings = (key, vertex_rings(model.faces, model.vertex_count))
         return self._rings[1]
 
-    def self_collider(self, model, x) -> SelfCollider:
-        """The self-collider of ``model``'s numbering, built from positions ``x`` when it changed."""
-        key = (model.vertex_count, self._version)
+    def self_collider(self, model, x, body_x=None) -> SelfCollider:
+        """The self-collider of ``model``'s numbering, built from positions ``x`` (and, for an
+        outfit's layers, the body at ``body_x``) when it changed."""
+        layered = self.panel_layer is not None and body_x is not None and self.settings.layers
+        key = (model.vertex_count, self._version, layered)
         if self._self is None or self._self_key != key:
             stats = self._self.stats if self._self is not None else None
             friction = float(np.mean(self.friction * self.settings.friction_scale))
+            layers = None
+            if layered:
+                layers = Layers.round_body(self.panel_layer[model.face_panel], model.face_panel, x, model.faces, body_x,
+                                           self.body.faces)
             self._self = SelfCollider(model.faces, model.face_panel, x, thickness=self.thickness, margin=self.self_margin,
-                                      mode=self.self_mode, friction=friction)
+                                      mode=self.self_mode, friction=friction, layers=layers)
             if stats is not None:
                 self._self.carry_stats(stats)
             self._self_key = key
@@ -336,7 +351,7 @@ class ContactPipeline:
         inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
         found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=rings)
         if found:
-            if self._self is not None and self._self_key == key:
+            if self._self is not None and self._self_key[:2] == key:
                 self._self.moved(state.x)
             self.rescue(model, state)
         return found, left

@@ -17,7 +17,10 @@ handles one garment:
 * **Sewing** in stages, innermost garment first, the outer ones waiting where they were placed
   (:meth:`tailor.dress.garment.Garment.sew_stage`); each panel keeps its own garment's fabric.
 * **Contact between garments** is self-contact of the outfit's one mesh: perfectly inelastic
-  (Carignan Eq. 5–8), over the same broad and narrow phases (:mod:`tailor.collide.cloth`).
+  (Carignan Eq. 5–8), over the same broad and narrow phases (:mod:`tailor.collide.cloth`), with
+  the layer rule as a one-sided constraint once sewn (:class:`~tailor.collide.Layers`): a pair of
+  two garments is judged by which one is outside, not by the side it was on, so an outer garment
+  caught behind an inner one is put back outside.
 """
 
 from __future__ import annotations

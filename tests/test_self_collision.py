@@ -191,6 +191,28 @@ def test_ignored_vertices_take_no_part_in_any_contact():
     assert counts[0] > 0 and counts[1] == 0 and counts[2] == 0 and counts[3] == counts[0]
 
 
+def test_an_outfits_layers_put_an_outer_panel_caught_behind_an_inner_one_back_outside():
+    """Side memory keeps a pair on the side it was on; an outfit's layers (Layers) keep the outer
+    garment outside even where it already started the step a millimetre behind the inner one."""
+    from tailor.collide import Layers
+
+    model, x0 = stacked(-0.001, 0.0, offset=0.0, size=0.1, resolution=0.02)  # "upper" just under "lower"
+    outer = panel_vertices(model, 1)
+    tri = x0[model.faces]
+    up = np.where(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])[:, 2] > 0, 1, -1)
+    v0 = np.zeros_like(x0)
+    v0[outer, 2] = -0.2  # and moving further in
+    ends = []
+    for layers in (None, Layers(model.face_panel.astype(np.int64), up.astype(np.int8))):
+        state = model.state(x0.copy(), v0.copy())
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on", layers=layers)
+        momentum = (state.v * np.asarray(model.vertex_mass)[:, None]).sum(axis=0)
+        assert collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01) > 0
+        np.testing.assert_allclose((state.v * np.asarray(model.vertex_mass)[:, None]).sum(axis=0), momentum, atol=1e-12)
+        ends.append(state.x[outer, 2].mean() - state.x[~outer, 2].mean())
+    assert ends[0] < 0.0 < 0.002 < ends[1]
+
+
 def test_cloth_contact_holds_the_vertices_pinned_now(monkeypatch):
     # pins change without the vertex count changing (attachments at settling, an outfit's garment
     # released after waiting to sew): cloth-cloth contact must not move a pinned vertex, nor keep

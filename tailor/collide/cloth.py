@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -60,7 +61,7 @@ from .broad import corner_bounds
 from .cloth_kernels import PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts, unique_ints
 from .grid import edge_edge_pairs, overlapping_boxes, vertex_rings, vertex_triangle_pairs
 
-__all__ = ["SelfCollider", "SELF_COLLISION_MODES"]
+__all__ = ["SelfCollider", "SELF_COLLISION_MODES", "Layers"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
 FOLDED_COS = 0.5
@@ -92,6 +93,76 @@ def _shared_vertex_pairs(vertex, patch, count: int):
     return np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
 
 
+@dataclass(frozen=True)
+class Layers:
+    """An outfit's garments as layers of one cloth (:mod:`tailor.outfit`).
+
+    Attributes
+    ----------
+    face_layer : (F,) int
+        Each face's garment, innermost 0.
+    face_out : (F,) int
+        +1 where a face's winding normal (b − a) × (c − a) points away from the body, −1 where it
+        points at it.
+
+    A contact between two garments keeps the outer one on the outer side, whatever side memory
+    says (3ds Max cloth's layer rule as a one-sided constraint): a vertex of the outer garment on
+    the side of an inner face its ``face_out`` names, a vertex of the inner one behind an outer face.
+    """
+
+    face_layer: np.ndarray
+    face_out: np.ndarray
+
+    @classmethod
+    def round_body(cls, face_layer, face_panel, x, faces, body_x, body_faces) -> "Layers":
+        """The layers of cloth at ``x`` round a body at ``body_x``. A panel's faces share its winding,
+        so one side of a panel faces out: the side most of its area turns to the body's normal at
+        the body vertex nearest each face (a hand beside a skirt, a fold, turns a few faces away)."""
+        from scipy.spatial import cKDTree
+
+        body_x = np.asarray(body_x, float)
+        corners = body_x[body_faces]
+        area_normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        body_normal = np.zeros_like(body_x)
+        for c in range(3):
+            np.add.at(body_normal, body_faces[:, c], area_normal)
+        body_normal /= np.maximum(np.linalg.norm(body_normal, axis=1, keepdims=True), 1e-300)
+        tri = np.asarray(x, float)[faces]
+        normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])  # length: twice the area
+        nearest = cKDTree(body_x).query(tri.mean(axis=1))[1]
+        vote = np.bincount(face_panel, weights=np.einsum("ij,ij->i", normal, body_normal[nearest]))
+        out = np.where(vote[face_panel] >= 0.0, 1, -1).astype(np.int8)
+        return cls(np.asarray(face_layer, np.int64), out)
+
+    def vertex_layer(self, faces, n: int) -> np.ndarray:
+        """(N,) each vertex's garment (garments share no vertex)."""
+        out = np.zeros(n, np.int64)
+        out[faces] = np.asarray(self.face_layer)[:, None]
+        return out
+
+    def vertex_triangle_sides(self, vertex_layer, vtx, tri) -> np.ndarray:
+        """(V,) int8 per vertex–triangle pair: the side of the triangle's winding normal the vertex
+        belongs on (±1), 0 within one garment."""
+        lv, lt = vertex_layer[vtx], np.asarray(self.face_layer)[tri]
+        out = np.asarray(self.face_out, np.int8)[tri]
+        return np.where(lv > lt, out, np.where(lv < lt, -out, 0)).astype(np.int8)
+
+    def edge_directions(self, vertex_layer, faces, x, pairs) -> np.ndarray:
+        """(E, 3) per edge pair (a0, a1, b0, b1): the direction edge a belongs in from edge b (the
+        inner edge's outward normal, signed), zero within one garment."""
+        if not len(pairs):
+            return np.zeros((0, 3))
+        e1, e2 = x[faces[:, 1]] - x[faces[:, 0]], x[faces[:, 2]] - x[faces[:, 0]]
+        out = np.cross(e1, e2) * np.asarray(self.face_out, float)[:, None]
+        normal = np.zeros_like(x)
+        for c in range(3):
+            np.add.at(normal, faces[:, c], out)
+        la, lb = vertex_layer[pairs[:, 0]], vertex_layer[pairs[:, 2]]
+        inner_b = normal[pairs[:, 2]] + normal[pairs[:, 3]]
+        inner_a = normal[pairs[:, 0]] + normal[pairs[:, 1]]
+        return np.where((la > lb)[:, None], inner_b, np.where((la < lb)[:, None], -inner_a, 0.0))
+
+
 class SelfCollider:
     """Self-collision of one cloth mesh (module docstring).
 
@@ -116,10 +187,12 @@ class SelfCollider:
         Cloth-on-cloth Coulomb coefficient for the sliding part (``inf``: Carignan's full Eq. 7).
     edges : bool
         Also check edge–edge pairs (:func:`detect_ee`); off, only vertex–triangle pairs.
+    layers : Layers, optional
+        An outfit's garments: contacts between them keep their order (:class:`Layers`).
     """
 
     def __init__(self, faces, face_group, x, *, thickness: float, margin: float = 0.01, mode: str = "auto",
-                 patch: float | None = None, friction: float = 0.4, edges: bool = True):
+                 patch: float | None = None, friction: float = 0.4, edges: bool = True, layers: Layers | None = None):
         if mode not in ("auto", "on"):
             raise ValueError(f"self-collision mode must be 'auto' or 'on', got {mode!r}")
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
@@ -129,6 +202,8 @@ class SelfCollider:
         self.friction = float(friction)
         self.edges = bool(edges)
         self.mode = mode
+        self.layers = layers
+        self._vertex_layer = layers.vertex_layer(self.faces, self.n) if layers is not None else None
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         self._ring_csr = vertex_rings(self.faces, self.n)  # each vertex's neighbours across an edge
         # undirected edges and each face's edges, for edge–edge pairs
@@ -146,6 +221,8 @@ class SelfCollider:
         self._reach = self.margin  # how deep a pair may have crossed in a step (the narrow phase cut-off beyond thickness)
         self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
+        self._tri_side = np.zeros(0, np.int8)
+        self._ee_toward = np.zeros((0, 3))
         self._x_prev = None
         self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1,
@@ -230,6 +307,8 @@ class SelfCollider:
         self._ee = np.zeros((0, 4), np.int64)
         self._tri_near = np.zeros(0, bool)
         self._ee_near = np.zeros(0, bool)
+        self._tri_side = np.zeros(0, np.int8)
+        self._ee_toward = np.zeros((0, 3))
         if len(faces):
             verts = unique_ints(self.faces[faces].ravel())
             lo, hi = (x, x) if swept is None else swept
@@ -246,11 +325,21 @@ class SelfCollider:
             vertex, tri, self._tri_near = vertex[order], tri[order], near[order]
             self._vtx = np.ascontiguousarray(vertex, dtype=np.int64)
             self._tri = tri
+            self._layer_sides(x)
             self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
             self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
         self._anchor = x.copy()
         self.stats["queries"] += 1
         self.stats["query_s"] += time.perf_counter() - t0
+
+    def _layer_sides(self, x) -> None:
+        """Each candidate's fixed side (:class:`Layers`; none for a single garment)."""
+        if self.layers is None:
+            self._tri_side = np.zeros(len(self._tri), np.int8)
+            self._ee_toward = np.zeros((len(self._ee), 3))
+            return
+        self._tri_side = self.layers.vertex_triangle_sides(self._vertex_layer, self._vtx, self._tri)
+        self._ee_toward = self.layers.edge_directions(self._vertex_layer, self.faces, x, self._ee)
 
     def ignore(self, vertices) -> None:
         """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact, as a
@@ -334,10 +423,10 @@ class SelfCollider:
         seen = np.zeros(0, np.int64)
         for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
             vt, ee = (detect_vt, detect_ee) if m >= PARALLEL_PAIRS else (detect_vt_serial, detect_ee_serial)
-            vt(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self.thickness,
+            vt(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self._tri_side, self.thickness,
                self.thickness + self._reach, ci, ca, cn, ch, hit)
             if self.edges:
-                ee(x, xp, v, dt, self._ee, self._ee_near, self.thickness, self.thickness + self._reach,
+                ee(x, xp, v, dt, self._ee, self._ee_near, self._ee_toward, self.thickness, self.thickness + self._reach,
                    ci, ca, cn, ch, hit, len(self._tri))
             found = np.flatnonzero(hit)
             key = np.sort(ci[found], axis=1) @ weight

@@ -76,7 +76,7 @@ def _store(k, out_i, out_a, out_n, out_h, i0, i1, i2, i3, a0, a1, a2, a3, n, h):
 
 
 @njit(cache=True, inline="always")
-def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
+def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit):
     """Whether candidate k (vertex ``vtx[k]``, triangle ``tri[k]``) is a contact; if so it fills
     slot k of the outputs and sets ``hit[k]``. Each contact is a stencil of four vertices
     with signed weights α summing to zero, the gap being (Σαᵢxᵢ)·n with ``n`` pointing to the side
@@ -85,7 +85,10 @@ def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, 
     (:func:`_classify`) over ``dt``. Pairs flagged ``near`` (the triangle touches the vertex's
     1-ring) keep only :data:`NEAR_THICKNESS` of the thickness: at a sharp bend or a seam corner they
     are close without touching, but a tight fold can still pass through. Each contact's kept
-    distance goes to ``out_h``.
+    distance goes to ``out_h``. ``fixed[k]`` (±1, 0: none) overrides the side memory: the side of
+    the triangle's winding normal the vertex belongs on (an outfit's layers, :class:`Layers`): a
+    pair that has just passed behind its triangle is put back on that side even if it started the
+    step behind it; one deeper behind than it travelled is left to untangling.
     """
     hit[k] = False
     p, t = vtx[k], tri[k]
@@ -100,6 +103,8 @@ def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, 
     s_prev = _dot(_d(xp, p, a), _cross(_d(xp, b, a), _d(xp, c, a)))
     s_now = _dot(d, n)
     side = (1.0 if s_prev > 0.0 else -1.0) if s_prev != 0.0 else (1.0 if s_now >= 0.0 else -1.0)
+    if fixed[k] != 0:
+        side = float(fixed[k])
     d11, d12, d22 = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
     den = d11 * d22 - d12 * d12
     if den <= 0.0:
@@ -124,22 +129,22 @@ def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, 
 
 
 @njit(cache=True, parallel=True)
-def detect_vt(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
+def detect_vt(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit):
     """Every vertex–triangle candidate through :func:`_vt_pair`, in parallel (one slot each: the result
     does not depend on the thread count)."""
     for k in prange(len(tri)):
-        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit)
+        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit)
 
 
 @njit(cache=True)
-def detect_vt_serial(x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit):
+def detect_vt_serial(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit):
     """:func:`detect_vt` on one thread: a few hundred candidates are not worth waking the others."""
     for k in range(len(tri)):
-        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, thickness, reach, out_i, out_a, out_n, out_h, hit)
+        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit)
 
 
 @njit(cache=True, inline="always")
-def _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+def _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
     """Whether candidate edge pair k of ``pairs`` (E, 4) = (a0, a1, b0, b1) is a contact; it uses slot
     ``offset + k`` of the outputs and of ``hit``.
 
@@ -150,7 +155,9 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out
     case: the sign of (pa − pb)·n before this step (it flips only when the edges pass through each
     other). Pairs whose closest points fall on an end (a vertex: the vertex–triangle test covers
     it) or that are nearly parallel (the normal is undefined) are left out; ``near`` pairs (ends
-    in each other's 1-ring) keep a smaller distance, as in :func:`detect_vt`.
+    in each other's 1-ring) keep a smaller distance, as in :func:`detect_vt`. A non-zero
+    ``toward[k]`` overrides the side memory: edge a belongs on the side of edge b that vector points
+    to (an outfit's layers), as ``fixed`` does in :func:`_vt_pair`.
     """
     slot = offset + k
     hit[slot] = False
@@ -183,6 +190,9 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out
     if _dot(n_prev, n) < 0.0:
         g_prev = -g_prev  # the edges turned over each other: keep the sign in today's normal
     side = (1.0 if g_prev > 0.0 else -1.0) if g_prev != 0.0 else (1.0 if g_now >= 0.0 else -1.0)
+    pull = _dot(n, (toward[k, 0], toward[k, 1], toward[k, 2]))
+    if pull != 0.0:
+        side = 1.0 if pull > 0.0 else -1.0
     h = NEAR_THICKNESS * thickness if near[k] else thickness
     if _classify(side * g_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
         _store(slot, out_i, out_a, out_n, out_h, a0, a1, b0, b1, 1.0 - s, s, t - 1.0, -t,
@@ -191,17 +201,17 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out
 
 
 @njit(cache=True, parallel=True)
-def detect_ee(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+def detect_ee(x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
     """Every edge–edge candidate through :func:`_ee_pair`, in parallel (one slot each)."""
     for k in prange(len(pairs)):
-        _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
+        _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
 
 
 @njit(cache=True)
-def detect_ee_serial(x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+def detect_ee_serial(x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
     """:func:`detect_ee` on one thread."""
     for k in range(len(pairs)):
-        _ee_pair(k, x, xp, vel, dt, pairs, near, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
+        _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
 
 
 @njit(cache=True)
