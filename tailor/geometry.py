@@ -20,6 +20,7 @@ __all__ = [
     "face_areas",
     "face_signed_areas_2d",
     "face_angles",
+    "vertex_normals",
     "unique_edges",
     "connected_components",
     "hinge_angles",
@@ -46,6 +47,23 @@ def face_areas(points, faces) -> np.ndarray:
     if c.ndim == 1:
         return 0.5 * np.abs(c)
     return 0.5 * np.linalg.norm(c, axis=1)
+
+
+def vertex_normals(points, faces, face_sign=None) -> np.ndarray:
+    """(N, 3) sums of the winding normals (b − a) × (c − a) of the faces at each vertex (area-weighted,
+    not normalised; zero at a vertex without faces), each face's times ``face_sign`` if given.
+
+    >>> vertex_normals(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 5, 5]]), np.array([[0, 1, 2]])).tolist()
+    [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]
+    """
+    p = np.asarray(points, dtype=float)
+    faces = np.asarray(faces)
+    t = p[faces]
+    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    if face_sign is not None:
+        fn = fn * np.asarray(face_sign, float)[:, None]
+    corner = faces.ravel()
+    return np.column_stack([np.bincount(corner, weights=np.repeat(fn[:, k], 3), minlength=len(p)) for k in range(3)])
 
 
 def face_angles(points, faces) -> np.ndarray:

@@ -21,6 +21,7 @@ import numpy as np
 
 from .curves import arc_center, sample_curve
 from .errors import PatternError
+from .geometry import vertex_normals
 from .pattern import LandmarkPlacement, TransformPlacement
 
 __all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
@@ -251,11 +252,7 @@ class _Outside:
         self.body, self.gap, self.side = body, gap, 1.5 * mesh.resolution
         keep = mesh.vertex_panel < first
         faces = mesh.faces[keep[mesh.faces].all(axis=1)]
-        tri = x[faces]
-        fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        n = np.zeros_like(x)
-        for k in range(3):
-            np.add.at(n, faces[:, k], fn)
+        n = vertex_normals(x, faces)
         self.ids = np.flatnonzero(np.linalg.norm(n, axis=1) > 0)
         self.x = x[self.ids].copy()
         self.n = n[self.ids] / np.linalg.norm(n[self.ids], axis=1, keepdims=True)

@@ -57,6 +57,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SimulationUnstable
+from ..geometry import vertex_normals
 from .broad import corner_bounds
 from .cloth_kernels import PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts, unique_ints
 from .grid import edge_edge_pairs, overlapping_boxes, vertex_rings, vertex_triangle_pairs
@@ -121,11 +122,7 @@ class Layers:
         from scipy.spatial import cKDTree
 
         body_x = np.asarray(body_x, float)
-        corners = body_x[body_faces]
-        area_normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        body_normal = np.zeros_like(body_x)
-        for c in range(3):
-            np.add.at(body_normal, body_faces[:, c], area_normal)
+        body_normal = vertex_normals(body_x, body_faces)
         body_normal /= np.maximum(np.linalg.norm(body_normal, axis=1, keepdims=True), 1e-300)
         tri = np.asarray(x, float)[faces]
         normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])  # length: twice the area
@@ -152,11 +149,7 @@ class Layers:
         inner edge's outward normal, signed), zero within one garment."""
         if not len(pairs):
             return np.zeros((0, 3))
-        e1, e2 = x[faces[:, 1]] - x[faces[:, 0]], x[faces[:, 2]] - x[faces[:, 0]]
-        out = np.cross(e1, e2) * np.asarray(self.face_out, float)[:, None]
-        normal = np.zeros_like(x)
-        for c in range(3):
-            np.add.at(normal, faces[:, c], out)
+        normal = vertex_normals(x, faces, self.face_out)  # pointing out, away from the body
         la, lb = vertex_layer[pairs[:, 0]], vertex_layer[pairs[:, 2]]
         inner_b = normal[pairs[:, 2]] + normal[pairs[:, 3]]
         inner_a = normal[pairs[:, 0]] + normal[pairs[:, 1]]
