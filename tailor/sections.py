@@ -1,8 +1,10 @@
 """Horizontal cross-sections of a body, and the trunk followed through them.
 
 A tape measure reads a closed outline; a mesh cut by a plane gives rings, open where the mesh has
-holes and crossing itself where it has folds. :func:`horizontal_outlines` turns the rings of many
-cuts into valid polygons (a nearly closed ring is closed, a self-crossing one repaired).
+holes and crossing itself where it has folds. A cut is made from the mesh's crossed edges: each
+crossed face gives a segment whose ends are named by (cut, edge), and segments sharing an edge
+chain into rings, all cuts at once. :func:`horizontal_outlines` turns the rings of many cuts into
+valid polygons (a nearly closed ring is closed, a self-crossing one repaired).
 :func:`trunk_chain` follows the trunk from cut to cut by overlap, so it needs no assumption about
 where the body stands: the trunk is the largest outline at mid-height, and each cut's trunk is the
 outline that overlaps the one next to it most.
@@ -74,7 +76,8 @@ def _partners(keys):
 
 
 def _walk(partner, start):
-    """Segments chained from segment ``start`` through shared ends: (ends in order, closed?)."""
+    """Segments chained from segment ``start`` through shared ends: (the segment ends in order, as
+    indices into the flattened ends; whether the chain closes; the segments it took)."""
     chain, end, seen = [2 * start, 2 * start + 1], 2 * start + 1, {start}
     while partner[end] >= 0 and partner[end] // 2 not in seen:
         s = partner[end] // 2
