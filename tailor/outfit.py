@@ -54,7 +54,7 @@ def outfit(patterns, *, name: str | None = None) -> Pattern:
         p = patterns[i]
         extra = room + LAYER_GAP if pieces else 0.0
         pieces.append(Piece(garment, len(panels), len(p.panels), p.layer, extra))
-        panels += [replace(q, name=f"{garment}/{q.name}", fabric=q.fabric or p.fabric, placement=_outward(q.placement, extra))
+        panels += [replace(q, name=f"{garment}/{q.name}", fabric=q.fabric or p.fabric)
                    for q in p.panels]
         seams += [_renamed_seam(s, garment, len(seams) + k) for k, s in enumerate(p.seams)]
         attachments += [_renamed_attachment(a, garment, len(attachments) + k) for k, a in enumerate(p.attachments)]
@@ -75,14 +75,6 @@ def _unique(names):
         seen[n] = seen.get(n, 0) + 1
         out.append(n if seen[n] == 1 else f"{n}-{seen[n]}")
     return out
-
-
-def _outward(placement, extra: float):
-    """A landmark placement ``extra`` [m] further from the body (a rigid one is cleared by
-    :func:`tailor.placement.place_panels`, which knows the body)."""
-    if isinstance(placement, LandmarkPlacement) and extra:
-        return replace(placement, clearance=placement.clearance + extra)
-    return placement
 
 
 def _renamed_side(side: SeamSide, garment: str) -> SeamSide:

@@ -15,7 +15,7 @@ Two kinds of placement come from the pattern:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -270,7 +270,7 @@ class _Outside:
         return out
 
 
-def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
+def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | None = None, x=None) -> np.ndarray:
     """Initial 3D positions [m], shape (N, 3), of every mesh vertex from its panel's placement.
 
     Parameters
@@ -282,45 +282,75 @@ def place_panels(pattern, mesh, landmarks=None, inside=None) -> np.ndarray:
     inside : callable ``inside(points) -> (n,) bool``, optional
         Whether points lie inside the body (:func:`tailor.collide.points_inside`); rows of a
         rolled panel that would start inside it are rolled on wider cylinders.
+    garment : int, optional
+        Place only this garment of an outfit (index into ``pattern.pieces``), its panels at their
+        own clearance, clear of the garments inside it as they lie at ``x`` (N, 3), sewn: the
+        outer garment is dressed over the inner one as it fits, not as it was placed (an inner
+        garment's placement is wider than its sewn shape, and an outer panel rolled round it
+        would start a hand's breadth off the body, its seams too far apart to close). Every other
+        vertex keeps its position in ``x``.
+
+    Without ``garment``, an outfit's garments are placed innermost first, each garment's landmark
+    placements at their clearance plus the room of the garments inside it
+    (:attr:`~tailor.pattern.Piece.clearance`), and clear of their placed cloth.
 
     Raises
     ------
     PatternError
         A panel without a placement, or a landmark placement without a body.
     """
-    x = np.zeros((mesh.vertex_count, 3))
+    if garment is None:
+        out, panels = np.zeros((mesh.vertex_count, 3)), range(len(pattern.panels))
+    else:
+        piece = pattern.pieces[garment]
+        out, panels = np.array(x, float), range(piece.first, piece.first + piece.count)
     body_axis = np.zeros(2)
     if landmarks:
         body_axis = np.mean([np.asarray(lm.center)[:2] for lm in landmarks.values()], axis=0)
     pieces = [pattern.piece_of(pi) for pi in range(len(pattern.panels))]
-    counts: dict = {}  # a garment's panels side by side around a landmark: distinct angles (bands stack vertically)
+    counts = _panels_round(pattern, pieces)
+    first = None
+    for pi in panels:
+        if pieces[pi].first and pieces[pi].first != first and inside is not None:  # an outer garment: clear of the inner ones too
+            first = pieces[pi].first
+            clear = _Outside(inside, out, mesh, first, LAYER_GAP)
+        extra = pieces[pi].clearance if garment is None else 0.0
+        ids = mesh.panel_vertices(pi)
+        out[ids] = _place_panel(pattern, pi, mesh.uv[ids], landmarks, clear if first else inside, counts[pi],
+                                body_axis, extra)
+    return out
+
+
+def _panels_round(pattern, pieces) -> list:
+    """Per panel, how many of its garment's panels share its landmark at distinct angles (1 for a
+    rigid placement): each takes that share of the circumference (bands stack vertically)."""
+    angles: dict = {}
     for p, piece in zip(pattern.panels, pieces):
         if isinstance(p.placement, LandmarkPlacement):
-            counts.setdefault((piece.name, p.placement.landmark), set()).add(round(p.placement.angle % (2 * math.pi), 6))
-    counts = {k: len(v) for k, v in counts.items()}
-    for pi, panel in enumerate(pattern.panels):
-        if pi and pieces[pi] != pieces[pi - 1] and inside is not None:  # an outer garment: clear of the inner ones too
-            inside = _Outside(inside, x, mesh, pieces[pi].first, LAYER_GAP)
-        ids = mesh.panel_vertices(pi)
-        uv = mesh.uv[ids]
-        pl = panel.placement
-        if pl is None:
-            pattern.fail(panel.where(), "the panel has no placement (give 'placement' or 'translation'/'rotation')")
-        if isinstance(pl, TransformPlacement):
-            x[ids] = pl.apply(uv) if inside is None else _clear_rigid(pl.apply(uv), pl, inside, body_axis,
-                                                                      clearance=0.01 + pieces[pi].clearance)
-            continue
-        if landmarks is None:
-            raise PatternError(f"{pattern.source}: {panel.where()}.placement: a landmark placement needs a body")
-        name = "bust" if pl.landmark == "chest" else pl.landmark
-        lm = landmarks.get(name) or landmarks.get(pl.landmark)
-        lo, hi = uv.min(axis=0), uv.max(axis=0)
-        anchor = np.array(pl.anchor) if pl.anchor is not None else np.array([0.5 * (lo[0] + hi[0]), hi[1]])
-        share = 1.0 / counts[(pieces[pi].name, pl.landmark)]
-        arc = _waist_arc(panel, anchor) if lm.width > 0 and lm.depth > 0 else None
-        coned = _cone(uv, anchor, arc, lm, pl, share, inside) if arc is not None else None
-        x[ids] = coned if coned is not None else _wrap(uv, anchor, lm, pl, share, inside)
-    return x
+            angles.setdefault((piece.name, p.placement.landmark), set()).add(round(p.placement.angle % (2 * math.pi), 6))
+    return [len(angles[(piece.name, p.placement.landmark)]) if isinstance(p.placement, LandmarkPlacement) else 1
+            for p, piece in zip(pattern.panels, pieces)]
+
+
+def _place_panel(pattern, pi: int, uv, landmarks, inside, count: int, body_axis, extra: float) -> np.ndarray:
+    """(n, 3) positions of panel ``pi``'s points ``uv``, its placement ``extra`` [m] further out."""
+    panel = pattern.panels[pi]
+    pl = panel.placement
+    if pl is None:
+        pattern.fail(panel.where(), "the panel has no placement (give 'placement' or 'translation'/'rotation')")
+    if isinstance(pl, TransformPlacement):
+        return pl.apply(uv) if inside is None else _clear_rigid(pl.apply(uv), pl, inside, body_axis, clearance=0.01 + extra)
+    if landmarks is None:
+        raise PatternError(f"{pattern.source}: {panel.where()}.placement: a landmark placement needs a body")
+    if extra:
+        pl = replace(pl, clearance=pl.clearance + extra)
+    name = "bust" if pl.landmark == "chest" else pl.landmark
+    lm = landmarks.get(name) or landmarks.get(pl.landmark)
+    lo, hi = uv.min(axis=0), uv.max(axis=0)
+    anchor = np.array(pl.anchor) if pl.anchor is not None else np.array([0.5 * (lo[0] + hi[0]), hi[1]])
+    arc = _waist_arc(panel, anchor) if lm.width > 0 and lm.depth > 0 else None
+    coned = _cone(uv, anchor, arc, lm, pl, 1.0 / count, inside) if arc is not None else None
+    return coned if coned is not None else _wrap(uv, anchor, lm, pl, 1.0 / count, inside)
 
 
 def _pair_plane(name, landmarks):

@@ -202,7 +202,9 @@ def test_a_skirt_sews_to_its_bodice_after_the_bodice_closes():
                     [{"panel": "front", "edge": 0}, {"panel": "skirt", "edge": 2}]])
     pattern, mesh, garment = plan(doc)
     assert garment.stages == 2
-    first, _ = garment.stage_plan()[0]
+    stages = garment.stage_plan()
+    first = stages[0].sewing
+    assert [(st.garment, st.dresses) for st in stages] == [(0, True), (0, False)]  # one garment: dressed once
     seam_of_pair = garment.sewing.seam
     assert set(seam_of_pair[first]) == {0} and set(seam_of_pair[~first]) == {1}
     assert plan(gc_skirt_doc())[2].stages == 1

@@ -33,11 +33,10 @@ def test_an_outfit_is_one_pattern_with_each_garments_panels_seams_and_fabric():
     assert all(s.a.panel.split("/")[0] == s.b.panel.split("/")[0] for s in both.seams)  # no seam between garments
     assert both.panel("tshirt/front").fabric == (tshirt.panel("front").fabric or tshirt.fabric)
     assert both.panel("trousers/front_left").fabric == (trousers.panel("front_left").fabric or trousers.fabric)
-    # the outer garment's landmark placements sit further out by the room the inner one takes
+    # the outer garment is placed further out by the room the inner one takes; its panels keep their own placement
     inner = max(p.placement.clearance for p in trousers.panels if isinstance(p.placement, LandmarkPlacement))
-    added = both.pieces[1].clearance
-    assert added > inner and both.panel("tshirt/front").placement.clearance == pytest.approx(
-        tshirt.panel("front").placement.clearance + added)
+    assert both.pieces[1].clearance > inner and both.pieces[0].clearance == 0
+    assert both.panel("tshirt/front").placement == tshirt.panel("front").placement
     assert outfit([tshirt]) is tshirt
 
 
@@ -72,6 +71,25 @@ def test_outer_garments_are_placed_outside_the_inner_ones():
     garment = garment_of_vertex(pattern, mesh.vertex_panel)
     order = out_of_order(x0, garment, body.vertices, body.faces)
     assert order[0, 1] == 0
+
+
+def test_an_outer_garment_is_dressed_over_the_inner_one_as_it_lies():
+    """Re-placed over the inner garment (here as placed), the T-shirt's sleeves, far above the
+    trousers, start where the T-shirt alone would; its body is clear of the trousers' cloth."""
+    body = read_body("mannequin")
+    trousers, tshirt = _patterns("trousers", "tshirt")
+    pattern = outfit([trousers, tshirt])
+    d, _, x0 = prepare(pattern, body, DrapeOptions(resolution=0.04))
+    alone, _, x_alone = prepare(tshirt, body, DrapeOptions(resolution=0.04))
+    mesh, placer = d.garment.mesh, d.placer
+    x = placer(x0, 1)
+    ids = d.garment.garment_vertices(1)
+    assert np.abs(x[:ids[0]] - x0[:ids[0]]).max() < 1e-12  # the inner garment is not moved
+    sleeves = np.isin(alone.garment.mesh.vertex_panel, [tshirt.panels.index(tshirt.panel(n)) for n in ("left_sleeve", "right_sleeve")])
+    assert np.abs(x[ids][sleeves] - x_alone[sleeves]).max() < 1e-9
+    assert np.abs(x0[ids][sleeves] - x_alone[sleeves]).max() > 0.02  # waiting, it was placed the inner one's room further out
+    garment = garment_of_vertex(pattern, mesh.vertex_panel)
+    assert len(edge_crossings(x, mesh.faces)) == 0 and out_of_order(x, garment, body.vertices, body.faces)[0, 1] == 0
 
 
 @pytest.fixture(scope="module")

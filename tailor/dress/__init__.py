@@ -12,7 +12,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -110,19 +110,40 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     timeline = Timeline(body, None if integ.explicit else min(q.step, q.step_per_resolution * opts.resolution))
     landmarks = measure_body(body, timeline.pose)
     loops = check_loops(pattern, landmarks)  # a loop too small for the body fails now, not at the sewing time-out
-    x0 = place_panels(pattern, mesh, landmarks, inside=InsideTest(timeline.pose, body.faces))
+    placer = Placer(pattern, mesh, landmarks, InsideTest(timeline.pose, body.faces))
+    x0 = placer()
     placed = [x0[mesh.panel_vertices(k)] for k in range(len(pattern.panels))]
     walls = limb_walls(pattern, landmarks, timeline.pose, placed) if opts.limb_walls else None
     garment = Garment(pattern, mesh, fabrics, merge_distance=max(0.3 * opts.resolution, 0.002))
     if walls is not None and walls.count:
+        placer = replace(placer, walls=walls, margin=garment.thickness)
         x0 = walls.separate(x0, mesh, garment.thickness)
     collider = BodyCollider(timeline.collider_frames, body.faces, margin=body_margin(garment.thickness))
     timeline.follow_collider(collider.margin)
     panel_layer = garment_of_vertex(pattern, np.arange(len(pattern.panels))) if pattern.pieces else None
     contacts = ContactPipeline(collider, timeline, thickness=garment.thickness, friction=garment.friction,
                                self_collision=opts.self_collision, panel_layer=panel_layer)
-    d = Dressing(opts, garment, timeline, contacts, integ, q, walls=walls, on_frame=on_frame, progress=progress)
+    d = Dressing(opts, garment, timeline, contacts, integ, q, walls=walls, placer=placer, on_frame=on_frame,
+                 progress=progress)
     return d, loops, x0
+
+
+@dataclass(frozen=True)
+class Placer:
+    """Where panels start on the body's rest pose (:func:`~tailor.placement.place_panels`), the legs'
+    panels kept to their side of the limb walls: all of them (``placer()``), or one garment of an
+    outfit dressed over the inner ones as they lie at ``x`` (``placer(x, garment)``)."""
+
+    pattern: object
+    mesh: object
+    landmarks: dict
+    inside: object
+    walls: object = None
+    margin: float = 0.0
+
+    def __call__(self, x=None, garment: int | None = None) -> np.ndarray:
+        out = place_panels(self.pattern, self.mesh, self.landmarks, inside=self.inside, garment=garment, x=x)
+        return out if self.walls is None else self.walls.separate(out, self.mesh, self.margin)
 
 
 def _garments(pattern, mesh) -> dict | None:

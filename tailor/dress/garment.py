@@ -8,7 +8,7 @@ each change says so, so the contacts and the integrator can follow.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -21,8 +21,19 @@ from ..tearing import TearableCloth
 from ..units import GRAVITY
 from .options import COMPRESSION, NEAR_RATE, NEAR_SEAM
 
-__all__ = ["Garment", "attachment_vertices"]
+__all__ = ["Garment", "Stage", "attachment_vertices"]
 
+
+@dataclass(frozen=True)
+class Stage:
+    """One sewing stage (:meth:`Garment.stage_plan`): the pairs sewing (S,) bool, the mesh vertices
+    waiting pinned (those of the garments outside), the outfit's garment sewing and whether the
+    stage is its first (it is dressed over the garments inside it then)."""
+
+    sewing: np.ndarray
+    waiting: np.ndarray
+    garment: int
+    dresses: bool
 
 
 def attachment_vertices(pattern, mesh, attachment) -> np.ndarray:
@@ -109,7 +120,7 @@ class Garment:
         return out
 
     def stage_plan(self) -> list:
-        """(pairs sewing, mesh vertices waiting pinned) of each sewing stage, in order.
+        """The :class:`Stage` of each sewing stage, in order.
 
         An outfit sews one garment at a time, innermost first, the garments outside waiting where
         they were placed. Within a garment, the seams joining its upper part to its lower part
@@ -126,8 +137,9 @@ class Garment:
             for part in (~late, late):
                 sewing = (garment[pairs[:, 0]] == k) & part
                 if sewing.any():
-                    plan.append((sewing, np.flatnonzero(garment > k)))
-        return plan or [(np.ones(len(pairs), bool), np.zeros(0, np.intp))]
+                    dresses = not plan or plan[-1].garment != k
+                    plan.append(Stage(sewing, np.flatnonzero(garment > k), k, dresses))
+        return plan or [Stage(np.ones(len(pairs), bool), np.zeros(0, np.intp), 0, True)]
 
     @property
     def stages(self) -> int:
@@ -137,10 +149,22 @@ class Garment:
     def sew_stage(self, state, k: int):
         """Begin sewing stage ``k`` of :attr:`stages`: only its pairs pull and merge, the garments
         outside wait where they were placed (pinned). Returns the state of the rebuilt model."""
-        sewing, waiting = self.stage_plan()[k]
-        self.sewing.sew_only(sewing)
-        self.waiting = waiting
+        stage = self.stage_plan()[k]
+        self.sewing.sew_only(stage.sewing)
+        self.waiting = stage.waiting
         return self.rebuild(state)
+
+    def garment_vertices(self, k: int) -> np.ndarray:
+        """Mesh vertices of the outfit's garment ``k`` (every vertex for a single garment)."""
+        if not self.pattern.pieces:
+            return np.arange(self.mesh.vertex_count)
+        return np.flatnonzero(garment_of_vertex(self.pattern, self.mesh.vertex_panel) == k)
+
+    def moved(self, state, ids, x):
+        """``state`` with the unwelded mesh vertices ``ids`` (none merged yet) put at ``x`` at rest."""
+        w = self.weld[ids]
+        state.x[w], state.v[w] = x, 0.0
+        return state
 
     @property
     def attached(self) -> np.ndarray:

@@ -43,9 +43,10 @@ class Dressing:
     """
 
     def __init__(self, options: DrapeOptions, garment, timeline, contacts, integrator, quality, *, walls=None,
-                 on_frame=None, progress=None):
+                 placer=None, on_frame=None, progress=None):
         self.options, self.garment, self.timeline, self.contacts = options, garment, timeline, contacts
         self.walls, self.attachments = walls, None
+        self.placer = placer  # ``placer(x, garment)``: an outfit's garment dressed over the inner ones (dress.Placer)
         self.held_heights = None  # (mesh vertices, heights [m], under, ceilings [m]) of the attachments while sewing
         self.integrator, self.quality = integrator, quality
         self.stepper = Stepper(integrator, contacts=contacts)
@@ -148,7 +149,8 @@ def sew(d: Dressing, x0):
 
     An outfit sews in stages, innermost garment first, each given the whole ``sew_timeout``: the
     garments outside wait where they were placed while the one inside closes, so no garment is
-    drawn in through another (:meth:`Garment.sew_stage`)."""
+    drawn in through another (:meth:`Garment.sew_stage`); each is then placed afresh over the sewn
+    ones inside it (:func:`_dress_over`) and sews."""
     t0 = time.perf_counter()
     d.enter(SEWING)
     g, sewing = d.garment, d.garment.sewing
@@ -159,9 +161,11 @@ def sew(d: Dressing, x0):
         d.constrain()
     frames, total = 0, 0.0
     merge_distance = sewing.merge_distance
-    for k in range(g.stages):
+    for k, stage in enumerate(g.stage_plan()):
         if g.stages > 1:
             state = g.sew_stage(state, k)
+            if stage.dresses and stage.garment:
+                state = _dress_over(d, state, stage.garment)
             sewing.merge_distance = merge_distance
             d.contacts.follow(g.friction)
             d.constrain()
@@ -187,6 +191,18 @@ def sew(d: Dressing, x0):
     sewing.route_around(None)
     return state, PhaseReport(total, time.perf_counter() - t0, frames,
                               {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds})
+
+
+def _dress_over(d: Dressing, state, garment: int):
+    """An outfit's ``garment`` placed afresh over the garments inside it, now sewn (their sewn
+    shape is far tighter than their placement, which it waited outside of), before it sews."""
+    if d.placer is None:
+        return state
+    g = d.garment
+    ids = g.garment_vertices(garment)
+    state = g.moved(state, ids, d.placer(g.frame(state), garment)[ids])
+    d.contacts.forget()
+    return state
 
 
 def _clear_of_body(d: Dressing, points):
