@@ -213,6 +213,27 @@ def test_an_outfits_layers_put_an_outer_panel_caught_behind_an_inner_one_back_ou
     assert ends[0] < 0.0 < 0.002 < ends[1]
 
 
+def test_edge_pairs_between_garments_point_out_of_the_inner_edge():
+    """Layers.edge_directions: zero within a garment; between two, the inner edge's outward normal
+    (pointing from it towards where the outer edge belongs), negated when edge a is the inner one."""
+    from tailor.collide import Layers
+
+    model, x0 = stacked(-0.004, 0.0, offset=0.0, size=0.1, resolution=0.02)  # panel 1 just under panel 0
+    tri = x0[model.faces]
+    up = np.where(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])[:, 2] > 0, 1, -1).astype(np.int8)
+    layers = Layers(model.face_panel.astype(np.int64), up)  # panel 1 is the outer garment; both face +z
+    vertex_layer = layers.vertex_layer(model.faces, model.vertex_count)
+    edges = np.unique(np.sort(model.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    rng = np.random.default_rng(0)
+    pairs = np.hstack([edges[rng.integers(0, len(edges), 400)], edges[rng.integers(0, len(edges), 400)]])
+    out = layers.edge_directions(vertex_layer, model.faces, x0, pairs)
+    la, lb = vertex_layer[pairs[:, 0]], vertex_layer[pairs[:, 2]]
+    assert (la == lb).any() and (la > lb).any() and (la < lb).any()
+    assert not out[la == lb].any()
+    assert (out[la > lb, 2] > 0).all() and (out[la < lb, 2] < 0).all()  # the outer edge belongs above
+    np.testing.assert_allclose(out[la != lb, :2], 0.0, atol=1e-12)
+
+
 def test_cloth_contact_holds_the_vertices_pinned_now(monkeypatch):
     # pins change without the vertex count changing (attachments at settling, an outfit's garment
     # released after waiting to sew): cloth-cloth contact must not move a pinned vertex, nor keep

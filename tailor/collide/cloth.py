@@ -147,13 +147,16 @@ class Layers:
     def edge_directions(self, vertex_layer, faces, x, pairs) -> np.ndarray:
         """(E, 3) per edge pair (a0, a1, b0, b1): the direction edge a belongs in from edge b (the
         inner edge's outward normal, signed), zero within one garment."""
-        if not len(pairs):
-            return np.zeros((0, 3))
-        normal = vertex_normals(x, faces, self.face_out)  # pointing out, away from the body
+        out = np.zeros((len(pairs), 3))
         la, lb = vertex_layer[pairs[:, 0]], vertex_layer[pairs[:, 2]]
-        inner_b = normal[pairs[:, 2]] + normal[pairs[:, 3]]
-        inner_a = normal[pairs[:, 0]] + normal[pairs[:, 1]]
-        return np.where((la > lb)[:, None], inner_b, np.where((la < lb)[:, None], -inner_a, 0.0))
+        between = np.flatnonzero(la != lb)  # most candidates lie within one garment: no normals for them
+        if not len(between):
+            return out
+        normal = vertex_normals(x, faces, self.face_out)  # pointing out, away from the body
+        p = pairs[between]
+        a_outside = (la[between] > lb[between])[:, None]
+        out[between] = np.where(a_outside, normal[p[:, 2]] + normal[p[:, 3]], -(normal[p[:, 0]] + normal[p[:, 1]]))
+        return out
 
 
 class SelfCollider:
@@ -312,7 +315,7 @@ class SelfCollider:
                                                       self._ring_csr, exact=swept is None)
             if self.edges:
                 self._ee, self._ee_near = edge_edge_pairs(unique_ints(self._face_edges[faces].ravel()), self._edges, lo,
-                                                          hi, radius, self._grid_cell, self._ring_csr)
+                                                          hi, radius, self._grid_cell, self._ring_csr, x=x)
             vertex, tri, near = self._drop_ignored(vertex, tri, near)
             order = np.lexsort((tri, vertex))
             vertex, tri, self._tri_near = vertex[order], tri[order], near[order]
