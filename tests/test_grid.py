@@ -48,44 +48,24 @@ def test_vertex_triangle_pairs_are_exactly_the_brute_force_ones(exact, cell):
     assert np.array_equal(near, [any(p * len(x) + q in keys for q in faces[k]) for p, k in got])
 
 
-def _segment_gaps(p0, p1, q0, q1, samples=501):
-    """Distances between segments p0–p1 and q0–q1 (rows): points of the first sampled densely, each
-    projected onto the second (within |p1 − p0| / (2·samples) of the true distance)."""
-    s = np.linspace(0.0, 1.0, samples)[None, :, None]
-    a = p0[:, None] + s * (p1 - p0)[:, None]  # (P, S, 3)
-    d = (q1 - q0)[:, None]
-    t = np.clip(np.einsum("psk,psk->ps", a - q0[:, None], d) / np.maximum(np.einsum("psk,psk->ps", d, d), 1e-30), 0.0, 1.0)
-    return np.linalg.norm(a - (q0[:, None] + t[..., None] * d), axis=2).min(axis=1)
-
-
-@pytest.mark.parametrize("cell, given_x", [(0.03, True), (0.5, True), (0.004, True), (0.03, False)])
-def test_edge_edge_pairs_are_the_box_pairs_whose_segments_can_come_near_each_once(cell, given_x):
-    """Every pair of edges that share no end, whose boxes come within ``radius`` and whose segments
-    can (their ends anywhere in their boxes: at most the box's diagonal from ``x``), each once;
-    none that cannot."""
+@pytest.mark.parametrize("cell", [0.03, 0.5, 0.004])
+def test_edge_edge_pairs_are_exactly_the_brute_force_ones_each_once(cell):
     rng = np.random.default_rng(4)
     x, faces, lo, hi = _soup(rng, faces=200)
     edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
     ids, radius = np.arange(0, len(edges), 2), 0.02
     *ring, keys = _ring(len(x), faces)
-    at = x if given_x else lo
-    pairs, near = edge_edge_pairs(ids, edges, lo, hi, radius, cell, ring, x=x if given_x else None)
-    reach = np.linalg.norm(hi - lo, axis=1)
-    boxes = []
+    pairs, near = edge_edge_pairs(ids, edges, lo, hi, radius, cell, ring)
+    want = set()
     for i, a in enumerate(ids):
         for b in ids[i + 1:]:
             ea, eb = edges[a], edges[b]
-            if not set(ea) & set(eb) and _gap(lo[ea].min(0), hi[ea].max(0), lo[eb].min(0), hi[eb].max(0)) <= radius:
-                boxes.append((ea, eb))
-    ea, eb = np.array([p[0] for p in boxes]), np.array([p[1] for p in boxes])
-    bound = radius + reach[ea].max(axis=1) + reach[eb].max(axis=1)
-    gap = _segment_gaps(at[ea[:, 0]], at[ea[:, 1]], at[eb[:, 0]], at[eb[:, 1]])
-    names = [frozenset([tuple(a), tuple(b)]) for a, b in boxes]
-    want = {k for k, g, m in zip(names, gap, bound) if g <= m - 1e-3}
-    surely = {k for k, g, m in zip(names, gap, bound) if g <= m + 1e-3}  # within the sampling's error of the bound
+            if set(ea) & set(eb):
+                continue
+            if _gap(lo[ea].min(0), hi[ea].max(0), lo[eb].min(0), hi[eb].max(0)) <= radius:
+                want.add(frozenset([tuple(ea), tuple(eb)]))
     got = [frozenset([tuple(p[:2]), tuple(p[2:])]) for p in pairs.tolist()]
-    assert len(got) == len(set(got)) and want <= set(got) <= surely and len(want) > 50
-    assert len(surely) < len(boxes)  # the segment test leaves out pairs the boxes alone would keep
+    assert len(got) == len(set(got)) and set(got) == want and len(want) > 50
     assert np.array_equal(near, [any(p * len(x) + q in keys for p in r[:2] for q in r[2:]) for r in pairs.tolist()])
 
 

@@ -67,8 +67,6 @@ __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "Layers"]
 SELF_COLLISION_MODES = ("auto", "on", "off")
 FOLDED_COS = 0.5
 """A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
-FAST_MARGIN = 1.0
-"""The broad phase's margin, in thicknesses, for cloth moving too fast for candidates to outlive a step."""
 GRID_EDGES = 2.0
 """Side of the broad phase's grid cells, in mean edge lengths of the cloth."""
 PATCH_EDGES = 2.5
@@ -175,9 +173,7 @@ class SelfCollider:
     thickness : float
         Distance kept between the cloth and itself [m].
     margin : float
-        Extra query radius [m]; candidates live until a vertex moves ``margin / 2``. Where the
-        cloth moves so fast that they would not outlive the next step, the query takes
-        :data:`FAST_MARGIN` thicknesses instead (:meth:`margin_for`).
+        Extra query radius [m]; candidates live until a vertex moves ``margin / 2``.
     mode : {"auto", "on"}
         ``auto`` checks only regions that can touch; ``on`` checks every vertex.
     patch : float, optional
@@ -198,7 +194,7 @@ class SelfCollider:
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.n = len(x)
         self.thickness = float(thickness)
-        self.max_margin = self.margin = float(margin)  # margin: the last query's
+        self.margin = float(margin)
         self.friction = float(friction)
         self.edges = bool(edges)
         self.mode = mode
@@ -225,8 +221,8 @@ class SelfCollider:
         self._ee_toward = np.zeros((0, 3))
         self._x_prev = None
         self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
-        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "fast_queries": 0, "contacts": 0, "max_active_vertices": 0,
-                      "max_edge_pairs": 0, "max_substeps": 1, "query_s": 0.0, "response_s": 0.0}
+        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1,
+                      "query_s": 0.0, "response_s": 0.0}
 
     # -- regions ---------------------------------------------------------------------------------
     def _patches(self, group, x, size):
@@ -290,17 +286,6 @@ class SelfCollider:
             return math.inf
         return float(np.linalg.norm((x - x.mean(axis=0)) - (x0 - x0.mean(axis=0)), axis=1).max())
 
-    def margin_for(self, step: float) -> float:
-        """The query's margin [m] for a step whose largest displacement relative to the centroid is
-        ``step`` [m]: the full ``margin`` where candidates would live two steps or more, else
-        :data:`FAST_MARGIN` thicknesses. A walking leg moves the cloth's fastest vertices past
-        ``margin / 2`` every step, so every step queries anyway; a wider radius then buys no
-        lifetime and only more candidates (three times as many for 1 cm as for 3 mm on trousers
-        and a T-shirt walking), every one checked at every sub-step."""
-        if math.isfinite(step) and step > 0.25 * self.max_margin:
-            return min(self.max_margin, FAST_MARGIN * self.thickness)
-        return self.max_margin
-
     def _query(self, x, xp, step):
         """Candidates: the pairs that come within ``thickness + margin`` anywhere on the step's
         straight-line motion from ``xp`` to ``x`` (swept boxes round each vertex and triangle: fast
@@ -330,7 +315,7 @@ class SelfCollider:
                                                       self._ring_csr, exact=swept is None)
             if self.edges:
                 self._ee, self._ee_near = edge_edge_pairs(unique_ints(self._face_edges[faces].ravel()), self._edges, lo,
-                                                          hi, radius, self._grid_cell, self._ring_csr, x=x)
+                                                          hi, radius, self._grid_cell, self._ring_csr)
             vertex, tri, near = self._drop_ignored(vertex, tri, near)
             order = np.lexsort((tri, vertex))
             vertex, tri, self._tri_near = vertex[order], tri[order], near[order]
@@ -396,10 +381,7 @@ class SelfCollider:
         if xp is not None:
             moved = max(moved, self._moved(xp, self._anchor))
         if moved >= 0.5 * self.margin:
-            step = self._moved(x, xp)
-            self.margin = self.margin_for(step)
-            self.stats["fast_queries"] += self.margin < self.max_margin
-            self._query(x, xp, step)
+            self._query(x, xp, self._moved(x, xp))
         xp = x if xp is None else xp
         total = 0
         if len(self._tri):

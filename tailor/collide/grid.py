@@ -124,36 +124,6 @@ def _gap2(q_lo, q_hi, i_lo, i_hi):
 
 
 @njit(cache=True, inline="always")
-def _segment_gap(x, a0, a1, b0, b1):
-    """Distance between the segments a0–a1 and b0–b1 of ``x`` (closest points clamped to them)."""
-    d1x, d1y, d1z = x[a1, 0] - x[a0, 0], x[a1, 1] - x[a0, 1], x[a1, 2] - x[a0, 2]
-    d2x, d2y, d2z = x[b1, 0] - x[b0, 0], x[b1, 1] - x[b0, 1], x[b1, 2] - x[b0, 2]
-    rx, ry, rz = x[a0, 0] - x[b0, 0], x[a0, 1] - x[b0, 1], x[a0, 2] - x[b0, 2]
-    a = d1x * d1x + d1y * d1y + d1z * d1z
-    e = d2x * d2x + d2y * d2y + d2z * d2z
-    f = d2x * rx + d2y * ry + d2z * rz
-    c = d1x * rx + d1y * ry + d1z * rz
-    b = d1x * d2x + d1y * d2y + d1z * d2z
-    den = a * e - b * b
-    s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 1e-30 else 0.0
-    t = (b * s + f) / e if e > 1e-30 else 0.0
-    if t < 0.0 or t > 1.0:
-        t = min(max(t, 0.0), 1.0)
-        s = min(max((b * t - c) / a, 0.0), 1.0) if a > 1e-30 else 0.0
-    gx, gy, gz = rx + s * d1x - t * d2x, ry + s * d1y - t * d2y, rz + s * d1z - t * d2z
-    return math.sqrt(gx * gx + gy * gy + gz * gz)
-
-
-@njit(cache=True, inline="always")
-def _reach(lo, hi, i, j):
-    """How far [m] a point of the segment i–j can be from where it is at the end of the step:
-    the larger diagonal of its ends' boxes over the step."""
-    di = math.sqrt((hi[i, 0] - lo[i, 0]) ** 2 + (hi[i, 1] - lo[i, 1]) ** 2 + (hi[i, 2] - lo[i, 2]) ** 2)
-    dj = math.sqrt((hi[j, 0] - lo[j, 0]) ** 2 + (hi[j, 1] - lo[j, 1]) ** 2 + (hi[j, 2] - lo[j, 2]) ** 2)
-    return max(di, dj)
-
-
-@njit(cache=True, inline="always")
 def _owns(q_lo, i_lo, r, a, b, c, origin, cell, dims):
     """Whether cell (a, b, c) holds the lower corner of the overlap of the grown query box and the item's box."""
     return (a == cell_of(max(q_lo[0] - r, i_lo[0]), origin, cell, dims, 0)
@@ -254,10 +224,8 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
 
 
 @njit(cache=True)
-def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r,
-            x, lo, hi):
-    """Count (``fill`` False) or write the edges after active edge ``q`` within ``r`` of it anywhere
-    over the step (their distance at ``x`` less how far their points can have moved), sharing no end."""
+def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r):
+    """Count (``fill`` False) or write the edges after active edge ``q`` within ``r`` of it, sharing no end."""
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     r2 = r * r
@@ -277,8 +245,6 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                         continue
                     if not _owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
                         continue
-                    if _segment_gap(x, a0, a1, b0, b1) > r + _reach(lo, hi, a0, a1) + _reach(lo, hi, b0, b1):
-                        continue
                     if fill:
                         out[start + found, 0] = a0
                         out[start + found, 1] = a1
@@ -293,34 +259,28 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs(ids, edges, e_lo, e_hi, origin, cell, dims, r, x, lo, hi, ring_ptr, ring_idx):
+def _ee_pairs(ids, edges, e_lo, e_hi, origin, cell, dims, r, ring_ptr, ring_idx):
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     counts = np.zeros(len(ids), np.int64)
     dummy = np.zeros((0, 4), np.int64)
     no = np.zeros(0, np.bool_)
     for q in prange(len(ids)):
-        counts[q] = _ee_one(q, False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r,
-                            x, lo, hi)
+        counts[q] = _ee_one(q, False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r)
     starts = np.zeros(len(ids) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out = np.empty((starts[-1], 4), np.int64)
     out_near = np.empty(starts[-1], np.bool_)
     for q in prange(len(ids)):
         _ee_one(q, True, out, out_near, starts[q], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell,
-                dims, r, x, lo, hi)
+                dims, r)
     return out, out_near
 
 
-def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, x=None):
+def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
     share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
     pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
-    :func:`vertex_triangle_pairs`).
-
-    With ``x`` (the ends at the end of the step, inside their boxes) the segments themselves must
-    come within ``radius`` there, less how far their points can have moved within their boxes: most
-    pairs of boxes that touch hold edges far apart (two diagonal edges' boxes overlap at their
-    corners)."""
+    :func:`vertex_triangle_pairs`)."""
     ids = np.ascontiguousarray(ids, np.int64)
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
@@ -328,7 +288,5 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, x=None
     e_lo = np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]]))
     e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
     grid = Grid(e_lo - radius, e_hi + radius, cell)
-    if x is None:  # the boxes' lower corners: every point of a box is within its diagonal of it
-        x = lo
     return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, grid.origin, grid.cell, grid.dims,
-                     float(radius), *(np.ascontiguousarray(a, np.float64) for a in (x, lo, hi)), *ring)
+                     float(radius), *ring)
