@@ -140,9 +140,9 @@ class HeightHold:
 
 class LimbWallContact:
     """A leg's panels stay on their side of the plane between the legs, below the limb's landmark,
-    as the body moves (:func:`~tailor.placement.limb_walls`): inelastic, like a body contact.
+    as the body moves (:func:`~tailor.limbwalls.limb_walls`): inelastic, like a body contact.
 
-    ``walls`` are the garment's :class:`~tailor.placement.LimbWalls`; ``mesh`` and ``weld`` number
+    ``walls`` are the garment's :class:`~tailor.limbwalls.LimbWalls`; ``mesh`` and ``weld`` number
     its vertices (a welded vertex whose members agree on one wall keeps to it).
     """
 

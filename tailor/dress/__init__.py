@@ -22,7 +22,8 @@ from ..integrators import make_integrator
 from ..measure import measure_body
 from ..mesh import discretise
 from ..outfit import garment_of_vertex, out_of_order, outfit
-from ..placement import limb_walls, place_panels
+from ..limbwalls import limb_walls
+from ..placement import place_panels
 from ..sim import quality as sim_quality
 from ..sizing import check_loops
 from .garment import Garment
