@@ -15,7 +15,9 @@ handles one garment:
   ``clearance``), and :func:`tailor.placement.place_panels` rolls any row that would start behind
   the cloth already placed further out.
 * **Sewing** in stages, innermost garment first, the outer ones waiting where they were placed
-  (:meth:`tailor.dress.garment.Garment.sew_stage`); each panel keeps its own garment's fabric.
+  (:meth:`tailor.dress.garment.Garment.sew_stage`); at its stage each is placed afresh, at its own
+  clearance, over the sewn garments inside it (``place_panels(..., garment=k)``). Each panel keeps
+  its own garment's fabric.
 * **Contact between garments** is self-contact of the outfit's one mesh: perfectly inelastic
   (Carignan Eq. 5–8), over the same broad and narrow phases (:mod:`tailor.collide.cloth`), with
   the layer rule as a one-sided constraint once sewn (:class:`~tailor.collide.Layers`): a pair of

@@ -27,7 +27,6 @@ from .pattern import LandmarkPlacement, TransformPlacement
 
 __all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
 
-
 SLOPE = 0.1
 """Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
 

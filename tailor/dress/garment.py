@@ -146,10 +146,9 @@ class Garment:
         """Sewing stages (:meth:`stage_plan`): one for a single garment without a waist seam."""
         return len(self.stage_plan())
 
-    def sew_stage(self, state, k: int):
-        """Begin sewing stage ``k`` of :attr:`stages`: only its pairs pull and merge, the garments
+    def sew_stage(self, state, stage: Stage):
+        """Begin a sewing ``stage`` of :meth:`stage_plan`: only its pairs pull and merge, the garments
         outside wait where they were placed (pinned). Returns the state of the rebuilt model."""
-        stage = self.stage_plan()[k]
         self.sewing.sew_only(stage.sewing)
         self.waiting = stage.waiting
         return self.rebuild(state)

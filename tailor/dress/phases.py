@@ -161,9 +161,10 @@ def sew(d: Dressing, x0):
         d.constrain()
     frames, total = 0, 0.0
     merge_distance = sewing.merge_distance
-    for k, stage in enumerate(g.stage_plan()):
-        if g.stages > 1:
-            state = g.sew_stage(state, k)
+    plan = g.stage_plan()
+    for stage in plan:
+        if len(plan) > 1:
+            state = g.sew_stage(state, stage)
             if stage.dresses and stage.garment:
                 state = _dress_over(d, state, stage.garment)
             sewing.merge_distance = merge_distance
