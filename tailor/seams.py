@@ -51,6 +51,8 @@ class Sewing:
         Where the pairs whose midpoint lies inside the body meet instead (:meth:`route_around`).
     stuck : (S,) bool
         Pairs that once closed by less than :data:`STALL` of their gap from one :meth:`close` to the next.
+    anchored : (A,) int
+        Mesh vertices of the panels held while sewing (:meth:`anchor`); none at first.
     """
 
     pairs: np.ndarray
@@ -71,6 +73,7 @@ class Sewing:
         if self.seam is not None:
             self.seam = np.asarray(self.seam, np.intp)[keep]
         self.stuck = np.zeros(len(self.pairs), bool)
+        self.anchored = np.zeros(0, np.intp)
         self._last_gap = np.full(len(self.pairs), np.inf)
         if self.merged is None:
             self.merged = np.zeros(len(self.pairs), bool)
@@ -152,15 +155,31 @@ class Sewing:
         p = weld[self.pairs[~self.merged & self.active]]
         return p[p[:, 0] != p[:, 1]]
 
-    def near_stiffness(self, x, pairs, mass, *, near: float, rate: float):
+    def anchor(self, ids) -> None:
+        """The mesh vertices ``ids`` belong to panels held while sewing (a waistband whose attached
+        edge keeps its height, :class:`~tailor.contact.HeightHold`): a pair with one end among them
+        is stiffened only once near (:meth:`near_stiffness`'s ``anchored_near``)."""
+        self.anchored = np.unique(np.asarray(ids, np.intp))
+
+    def near_stiffness(self, x, pairs, mass, *, near: float, rate: float, weld=None, anchored_near: float = 0.0):
         """Stiffness [N/m] and damping [N·s/m] of implicit springs on the ``pairs`` closer than ``near``.
 
         A zero-length spring of stiffness m·k (Eq. 15's k·m, m the pair's mean mass) is far too
         stiff to integrate explicitly once k is large enough to stretch cloth into place; the
         implicit solver takes it in its stride. Pairs farther than ``near`` get none (the gentle
         explicit pull of :meth:`forces` brings them closer first).
+
+        A pair joining a held panel to a free one (one end :meth:`anchor`-ed; ``weld`` numbers the
+        simulated vertices) is stiffened only within ``anchored_near``: such a spring pulls the held
+        panel as hard as the free one, and a band held by its top edge was stretched 3-10x down to
+        the skirt or trousers placed 5-11 cm below it (GarmentCode's placements), past the stability
+        limit at 2 cm meshes. The capped explicit pull, which cloth follows as a whole, brings them near.
         """
         gap = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
+        if weld is not None and len(self.anchored):
+            held = np.zeros(len(x), bool)
+            held[weld[self.anchored]] = True
+            near = np.where(held[pairs[:, 0]] != held[pairs[:, 1]], anchored_near, near)
         m = 0.5 * (mass[pairs[:, 0]] + mass[pairs[:, 1]])
         k = np.where(gap < near, m * rate, 0.0)
         return k, 2.0 * np.sqrt(k * m)

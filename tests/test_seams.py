@@ -75,6 +75,26 @@ def test_only_the_pairs_sewing_now_pull_and_merge():
     assert sewing.close(x) == 1 and sewing.open_count == 0
 
 
+def test_a_pair_to_a_held_panel_is_stiffened_only_when_near():
+    # a waistband held at the waist while sewing: a stiff spring to the skirt below would stretch
+    # the band down to it; the gentle explicit pull brings the skirt near first
+    x = np.array([[0.0, 0, 0], [0.0, 0, 0.05], [1.0, 0, 0], [1.0, 0, 0.05], [2.0, 0, 0], [2.0, 0, 0.01]])
+    pairs = np.array([[0, 1], [2, 3], [4, 5]])
+    sewing = Sewing(pairs)
+    mass = np.ones(6)
+    k, _ = sewing.near_stiffness(x, pairs, mass, near=0.08, rate=1.0)
+    assert k.tolist() == [1.0, 1.0, 1.0]
+    sewing.anchor([1, 3, 5])
+    sewing.anchor([1, 2, 3, 5])  # the second call replaces the first: 2-3 now joins two held vertices
+    k, _ = sewing.near_stiffness(x, pairs, mass, near=0.08, rate=1.0, weld=np.arange(6), anchored_near=0.02)
+    assert k.tolist() == [0.0, 1.0, 1.0]  # far from a held panel; both held; near one
+    # in welded numbering (0 and 1 merged): the pairs 2-3 and 4-5 as before
+    weld = np.array([0, 0, 1, 2, 3, 4])
+    k, _ = sewing.near_stiffness(x[[0, 2, 3, 4, 5]], np.array([[1, 2], [3, 4]]), np.ones(5), near=0.08, rate=1.0,
+                                 weld=weld, anchored_near=0.02)
+    assert k.tolist() == [1.0, 1.0]
+
+
 def test_each_kept_pair_keeps_its_seam_when_self_pairs_are_dropped():
     # a dart's tip pairs with itself and is dropped: the pairs after it must still name their own
     # seam (the sewing time-out's message named a dart for the GarmentCode dress's open shoulder)

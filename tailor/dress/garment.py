@@ -19,7 +19,7 @@ from ..outfit import garment_of_vertex
 from ..seams import Sewing, merge_state
 from ..tearing import TearableCloth
 from ..units import GRAVITY
-from .options import COMPRESSION, NEAR_RATE, NEAR_SEAM
+from .options import ANCHORED_NEAR, COMPRESSION, NEAR_RATE, NEAR_SEAM
 
 __all__ = ["Garment", "Stage", "attachment_vertices"]
 
@@ -93,10 +93,12 @@ class Garment:
         return forces
 
     def stiffen_near_pairs(self, x) -> None:
-        """Open seam pairs closer than :data:`NEAR_SEAM` get stiff implicit springs for the next frame."""
+        """Open seam pairs closer than :data:`NEAR_SEAM` (:data:`ANCHORED_NEAR` with an anchored end)
+        get stiff implicit springs for the next frame."""
         m = self.model
         if len(m.pair_vertices):
-            k, c = self.sewing.near_stiffness(x, m.pair_vertices, m.vertex_mass, near=NEAR_SEAM, rate=NEAR_RATE)
+            k, c = self.sewing.near_stiffness(x, m.pair_vertices, m.vertex_mass, near=NEAR_SEAM, rate=NEAR_RATE,
+                                              weld=self.weld, anchored_near=ANCHORED_NEAR)
             self.model = replace(m, pair_stiffness=k, pair_damping=c)
 
     def rebuild(self, state):

@@ -19,7 +19,7 @@ from ..sim import DEFAULT_QUALITY, QUALITY
 from ..tearing import Cut
 
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
-           "NEAR_SEAM", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
+           "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
            "STRAGGLER_REACH", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER"]
 
 DRAPE_RESOLUTION = 0.02
@@ -27,6 +27,10 @@ DRAPE_RESOLUTION = 0.02
 
 NEAR_SEAM = 0.08
 """Seam pairs closer than this [m] are pulled by stiff implicit springs."""
+
+ANCHORED_NEAR = 0.02
+"""... those joining a panel held while sewing (a waistband at the waist) to a free one, closer than
+this (:meth:`~tailor.seams.Sewing.anchor`): from 8 cm such springs stretched the band 3-10x."""
 
 ROUTE_BEYOND = 0.04
 """Seam pairs farther apart than this [m] whose midpoint is inside the body meet at a point over it

@@ -157,8 +157,13 @@ def sew(d: Dressing, x0):
     state = g.model.state(x0)
     attached = g.attached
     if len(attached):
-        d.held_heights = (attached, x0[attached, 2], *g.attached_ceilings(x0))
+        under, ceilings = g.attached_ceilings(x0)
+        d.held_heights = (attached, x0[attached, 2], under, ceilings)
         d.constrain()
+        # the innermost garment's attached panels, held: their seams are stiffened only when near (an
+        # outer band over an inner one is stretched by its seams as before: it needs the room the
+        # simulated layers inside it take, docs/outfits.md)
+        sewing.anchor(np.intersect1d(under, g.garment_vertices(0)))
     frames, total = 0, 0.0
     merge_distance = sewing.merge_distance
     plan = g.stage_plan()
