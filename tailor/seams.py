@@ -53,6 +53,9 @@ class Sewing:
         Pairs that once closed by less than :data:`STALL` of their gap from one :meth:`close` to the next.
     anchored : (A,) int
         Mesh vertices of the panels held while sewing (:meth:`anchor`); none at first.
+    blocked : (S,) bool
+        Pairs whose straight way to each other ran through the body when their stage began
+        (:meth:`block`): routed round it from the start.
     """
 
     pairs: np.ndarray
@@ -74,6 +77,8 @@ class Sewing:
             self.seam = np.asarray(self.seam, np.intp)[keep]
         self.stuck = np.zeros(len(self.pairs), bool)
         self.anchored = np.zeros(0, np.intp)
+        self.blocked = np.zeros(len(self.pairs), bool)
+        self.routes_stuck = False
         self._last_gap = np.full(len(self.pairs), np.inf)
         if self.merged is None:
             self.merged = np.zeros(len(self.pairs), bool)
@@ -108,12 +113,39 @@ class Sewing:
         index[order] = np.arange(len(first))
         return index[labels]
 
-    def route_around(self, meeting, beyond: float = 0.0) -> None:
-        """Pairs :attr:`stuck` farther apart than ``beyond`` [m] whose midpoint lies inside the body
-        meet at ``meeting(midpoints) -> (ids, points)`` instead, points clear of the body (None:
-        every pair meets at its midpoint). Nearer pairs are the implicit springs' (:meth:`near_stiffness`);
-        pairs still closing are left to the straight pull, which slides round the body well enough."""
+    def route_around(self, meeting, beyond: float = 0.0, *, stuck: bool = True) -> None:
+        """Pairs :attr:`blocked`, and with ``stuck`` those :attr:`stuck`, farther apart than ``beyond``
+        [m] whose midpoint lies inside the body meet at ``meeting(midpoints) -> (ids, points)``
+        instead, points clear of the body (None: every pair meets at its midpoint). Nearer pairs are
+        the implicit springs' (:meth:`near_stiffness`); pairs still closing are left to the straight
+        pull, which slides round the body well enough."""
         self.meeting, self.meeting_beyond = meeting, beyond
+        self.routes_stuck = meeting is not None and stuck
+
+    def block(self, x, inside, *, over: float, samples: int = 19) -> int:
+        """Mark the open pairs sewing now whose straight way between their ends at ``x`` passes
+        through the body (``inside(points) -> bool``, probed at ``samples`` points) and whose
+        midpoint lies less than ``over`` [m] under its top :attr:`blocked`; return how many are.
+
+        A sleeveless dress placed flat in front of and behind the body has its straps' ends either
+        side of the shoulder, just below its top: pulled straight, they stop on its faces and are
+        routed over it only once stuck (:data:`~tailor.dress.options.ROUTE_AFTER`), by when the
+        bodice has closed round the chest and holds them down (GarmentCode's dress, 3 cm: 46 pairs
+        open at the time-out). Known from the placement, they are routed from the start. Pairs deep
+        in the body (a sleeve's underarm corner through the armpit) are left to the straight pull.
+        """
+        now = np.flatnonzero(~self.merged & self.active)
+        p = self.pairs[now]
+        t = np.linspace(0.05, 0.95, samples)[None, :, None]
+        along = x[p[:, 0]][:, None] * (1.0 - t) + x[p[:, 1]][:, None] * t
+        through = np.asarray(inside(along.reshape(-1, 3)), bool).reshape(len(p), samples).any(axis=1)
+        mid = 0.5 * (x[p[through, 0]] + x[p[through, 1]])
+        up = np.linspace(0.0, over, samples)
+        above = mid[:, None] + up[None, :, None] * np.array([0.0, 0.0, 1.0])
+        clear = ~np.asarray(inside(above.reshape(-1, 3)), bool).reshape(len(mid), samples)
+        self.blocked[:] = False
+        self.blocked[now[np.flatnonzero(through)[clear.any(axis=1)]]] = True
+        return int(self.blocked.sum())
 
     def forces(self, model, state, weld, out):
         """Add Eq. 15 forces of the open pairs sewing now into ``out`` [N] (welded model and state).
@@ -130,7 +162,7 @@ class Sewing:
         d = state.x[j] - state.x[i]
         to_i, to_j = d.copy(), -d  # twice the way to the meeting point
         if self.meeting is not None:
-            self._route(state.x, i, j, d, self.stuck[now][keep], to_i, to_j)
+            self._route(state.x, i, j, d, (self.blocked | (self.stuck & self.routes_stuck))[now][keep], to_i, to_j)
         damp = 2.0 * np.sqrt(2.0 * self.rate) * (state.v[j] - state.v[i])  # critically damped closing
         m = model.vertex_mass
         for ends, accel in ((i, self.rate * to_i + damp), (j, self.rate * to_j - damp)):
@@ -140,10 +172,10 @@ class Sewing:
                 out[:, k] += np.bincount(ends, m[ends] * accel[:, k], minlength=len(out))
         return out
 
-    def _route(self, x, i, j, d, stuck, to_i, to_j) -> None:
-        """Point the stuck far pairs (ends ``i``, ``j``, gaps ``d``) whose midpoint is inside the body
-        at their :attr:`meeting` point, in place in ``to_i``, ``to_j``."""
-        far = np.flatnonzero(stuck & (np.einsum("ij,ij->i", d, d) > self.meeting_beyond ** 2))
+    def _route(self, x, i, j, d, routed, to_i, to_j) -> None:
+        """Point the ``routed`` far pairs (ends ``i``, ``j``, gaps ``d``) whose midpoint is inside the
+        body at their :attr:`meeting` point, in place in ``to_i``, ``to_j``."""
+        far = np.flatnonzero(routed & (np.einsum("ij,ij->i", d, d) > self.meeting_beyond ** 2))
         if not len(far):
             return
         ids, met = self.meeting(0.5 * (x[i[far]] + x[j[far]]))

@@ -95,6 +95,36 @@ def test_a_pair_to_a_held_panel_is_stiffened_only_when_near():
     assert k.tolist() == [1.0, 1.0]
 
 
+def test_pairs_across_a_body_just_under_its_top_are_routed_from_the_start():
+    # a ball of radius 0.1 as the shoulder: straps either side 3 cm under its top are blocked and
+    # routed over it at once; a pair through its middle (10 cm deep) waits to be stuck; a pair
+    # beside it is pulled straight
+    def inside(p):
+        return np.linalg.norm(p, axis=1) < 0.1
+
+    x = np.array([[0.0, -0.2, 0.07], [0.0, 0.2, 0.07], [0.0, -0.2, 0.0], [0.0, 0.2, 0.0],
+                  [0.3, -0.2, 0.0], [0.3, 0.2, 0.0]])
+    sewing = Sewing(np.array([[0, 1], [2, 3], [4, 5]]))
+    assert sewing.block(x, inside, over=0.05) == 1 and sewing.blocked.tolist() == [True, False, False]
+    assert sewing.block(x, inside, over=0.02) == 0  # 3 cm under the top: beyond 2 cm
+    sewing.merged[0] = True
+    assert sewing.block(x, inside, over=0.05) == 0  # merged pairs are not routed
+
+    from types import SimpleNamespace
+
+    from tailor.model import State
+
+    over = np.array([0.0, 0.0, 0.12])
+    sewing = Sewing(np.array([[0, 1], [2, 3], [4, 5]]), max_acceleration=1e9)
+    sewing.block(x, inside, over=0.05)
+    sewing.route_around(lambda mid: (np.flatnonzero(inside(mid)), np.tile(over, (int(inside(mid).sum()), 1))),
+                        beyond=0.04, stuck=False)
+    f = sewing.forces(SimpleNamespace(vertex_mass=np.ones(6)), State(x, np.zeros((6, 3)), 0.0), np.arange(6),
+                      np.zeros((6, 3)))
+    assert f[0, 2] > 0 and f[1, 2] > 0  # the straps: up over the top
+    assert f[2, 2] == 0 and f[2, 1] > 0  # the deep pair: straight, until it is stuck
+
+
 def test_each_kept_pair_keeps_its_seam_when_self_pairs_are_dropped():
     # a dart's tip pairs with itself and is dropped: the pairs after it must still name their own
     # seam (the sewing time-out's message named a dart for the GarmentCode dress's open shoulder)

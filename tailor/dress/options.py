@@ -20,7 +20,7 @@ from ..tearing import Cut
 
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
-           "STRAGGLER_REACH", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER"]
+           "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER"]
 
 DRAPE_RESOLUTION = 0.02
 """Default garment mesh edge length [m] of :func:`~tailor.dress.drape` and ``tailor drape`` (2 cm)."""
@@ -37,6 +37,11 @@ ROUTE_BEYOND = 0.04
 (:meth:`~tailor.seams.Sewing.route_around`): a sleeveless dress's straps, placed flat in front of and
 behind the shoulder, are drawn over it instead of into it (docs/measurements.md, "Seams round the
 body")."""
+
+BLOCKED_OVER = 0.1
+"""Seam pairs whose straight way runs through the body at placement, their midpoint less than this
+[m] under its top (a strap's ends either side of the shoulder), are routed over it from the start
+(:meth:`~tailor.seams.Sewing.block`)."""
 
 ROUTE_AFTER = 0.25
 """... once this fraction of the sewing time-out has passed: a garment that sews in that time (most

@@ -25,7 +25,7 @@ from ..contact import HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..sim import Guard, Stepper, max_stretch
-from .options import (MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
+from .options import (BLOCKED_OVER, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
                       ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, WELD_BATCH, DrapeOptions,
                       PhaseSettings)
 from .report import DrapeProgress, PhaseReport
@@ -177,12 +177,14 @@ def sew(d: Dressing, x0):
             d.constrain()
         t, unwelded = 0.0, 0  # pairs merged since the last weld (held by their seam springs meanwhile)
         sewing.route_around(None)
+        if d.placer is not None and sewing.block(g.frame(state), d.placer.inside, over=BLOCKED_OVER):  # over it from the start
+            sewing.route_around(lambda points: _clear_of_body(d, points), beyond=ROUTE_BEYOND, stuck=False)
         while sewing.sewing_count and t < d.options.sew_timeout:
             state = d.advance(state, d.frame_dt)
             t += d.frame_dt
             frames += 1
             _widen_merging(sewing, t, d.options)
-            if t >= ROUTE_AFTER * d.options.sew_timeout and sewing.meeting is None:  # stuck on the body
+            if t >= ROUTE_AFTER * d.options.sew_timeout and not sewing.routes_stuck:  # stuck on the body
                 sewing.route_around(lambda points: _clear_of_body(d, points), beyond=ROUTE_BEYOND)
             merged = sewing.close(g.frame(state))
             unwelded += merged
