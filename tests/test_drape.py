@@ -152,8 +152,7 @@ def test_garmentcode_patterns_drape_with_their_own_placement(garmentcode_dir, ma
     """GarmentCode's five patterns, placed for their own body: sewn into one piece, nothing inside
     the body, nothing sliding off (a top hangs from the shoulders, a bottom from the hips)."""
     pattern = read_pattern(garmentcode_dir / f"{name}_specification.json")
-    # the dress's back straps, drawn over the shoulder, catch under the deltoid at 4 cm (not at 3)
-    result = drape(pattern, read_body("mannequin"), frames=13, resolution=0.03 if name == "dress_fitted_circle" else 0.04)
+    result = drape(pattern, read_body("mannequin"), frames=13, resolution=0.04)
     assert _one_piece(result)
     assert result.report.max_penetration_m <= 0.002
     marks = find_landmarks(mannequin.vertices, mannequin.faces)
