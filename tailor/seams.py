@@ -130,9 +130,9 @@ class Sewing:
         A sleeveless dress placed flat in front of and behind the body has its straps' ends either
         side of the shoulder, just below its top: pulled straight, they stop on its faces and are
         routed over it only once stuck (:data:`~tailor.dress.options.ROUTE_AFTER`), by when the
-        bodice has closed round the chest and holds them down (GarmentCode's dress, 3 cm: 46 pairs
-        open at the time-out). Known from the placement, they are routed from the start. Pairs deep
-        in the body (a sleeve's underarm corner through the armpit) are left to the straight pull.
+        bodice has closed round the chest and holds them down (GarmentCode's dress; docs/measurements.md,
+        "Sixth day"). Known from the placement, they are routed from the start. Pairs deep in the
+        body (a sleeve's underarm corner through the armpit) are left to the straight pull.
         """
         now = np.flatnonzero(~self.merged & self.active)
         p = self.pairs[now]
@@ -203,9 +203,10 @@ class Sewing:
 
         A pair joining a held panel to a free one (one end :meth:`anchor`-ed; ``weld`` numbers the
         simulated vertices) is stiffened only within ``anchored_near``: such a spring pulls the held
-        panel as hard as the free one, and a band held by its top edge was stretched 3-10x down to
-        the skirt or trousers placed 5-11 cm below it (GarmentCode's placements), past the stability
-        limit at 2 cm meshes. The capped explicit pull, which cloth follows as a whole, brings them near.
+        panel as hard as the free one, and a band held by its top edge was stretched down to the
+        skirt or trousers placed a hand's breadth below it (GarmentCode's placements), past the
+        stability limit at 2 cm meshes. The capped explicit pull, which cloth follows as a whole,
+        brings them near.
         """
         gap = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
         if weld is not None and len(self.anchored):

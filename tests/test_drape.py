@@ -186,7 +186,7 @@ def test_a_garmentcode_waistband_stays_at_the_waist(mannequin):
     """A band lighter than the skirt sewn to it used to be drawn down to the skirt while sewing and
     then slide over the hips (GarmentCode's skirts ended 14 cm low): its labelled waist edge now
     keeps its height while the seams close and is attached once gravity is on; its seams to the
-    skirt are stiffened only when near, drawing the skirt up to it instead of stretching it down (3.2x before, 1.3x since)."""
+    skirt are stiffened only when near, drawing the skirt up to it instead of stretching it down."""
     pattern = pattern_from_dict(gc_skirt_doc(), source="gc_skirt.json")
     result = drape(pattern, mannequin, frames=3, resolution=0.04, record_sewing=True)
     band_faces = np.isin(result.mesh.face_panel, [pattern.panel_index("wb_front"), pattern.panel_index("wb_back")])

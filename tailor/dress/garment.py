@@ -93,8 +93,8 @@ class Garment:
         return forces
 
     def stiffen_near_pairs(self, x) -> None:
-        """Open seam pairs closer than :data:`NEAR_SEAM` (:data:`ANCHORED_NEAR` with an anchored end)
-        get stiff implicit springs for the next frame."""
+        """Open seam pairs closer than :data:`NEAR_SEAM` (:data:`ANCHORED_NEAR` when joining a held
+        panel to a free one) get stiff implicit springs for the next frame."""
         m = self.model
         if len(m.pair_vertices):
             k, c = self.sewing.near_stiffness(x, m.pair_vertices, m.vertex_mass, near=NEAR_SEAM, rate=NEAR_RATE,

@@ -30,7 +30,8 @@ NEAR_SEAM = 0.08
 
 ANCHORED_NEAR = 0.02
 """... those joining a panel held while sewing (a waistband at the waist) to a free one, closer than
-this (:meth:`~tailor.seams.Sewing.anchor`): from 8 cm such springs stretched the band 3-10x."""
+this (:meth:`~tailor.seams.Sewing.anchor`): from farther, such springs stretched the held band
+down to the free panel (docs/measurements.md, "Sixth day")."""
 
 ROUTE_BEYOND = 0.04
 """Seam pairs farther apart than this [m] whose midpoint is inside the body meet at a point over it
