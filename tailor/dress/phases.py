@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from functools import partial
 
 import numpy as np
 
@@ -167,6 +168,7 @@ def sew(d: Dressing, x0):
     frames, total = 0, 0.0
     merge_distance = sewing.merge_distance
     plan = g.stage_plan()
+    meet = partial(_clear_of_body, d)  # where pairs routed round the body meet
     for stage in plan:
         if len(plan) > 1:
             state = g.sew_stage(state, stage)
@@ -178,14 +180,14 @@ def sew(d: Dressing, x0):
         t, unwelded = 0.0, 0  # pairs merged since the last weld (held by their seam springs meanwhile)
         sewing.route_around(None)
         if d.placer is not None and sewing.block(g.frame(state), d.placer.inside, over=BLOCKED_OVER):  # over it from the start
-            sewing.route_around(lambda points: _clear_of_body(d, points), beyond=ROUTE_BEYOND, stuck=False)
+            sewing.route_around(meet, beyond=ROUTE_BEYOND, stuck=False)
         while sewing.sewing_count and t < d.options.sew_timeout:
             state = d.advance(state, d.frame_dt)
             t += d.frame_dt
             frames += 1
             _widen_merging(sewing, t, d.options)
             if t >= ROUTE_AFTER * d.options.sew_timeout and not sewing.routes_stuck:  # stuck on the body
-                sewing.route_around(lambda points: _clear_of_body(d, points), beyond=ROUTE_BEYOND)
+                sewing.route_around(meet, beyond=ROUTE_BEYOND)
             merged = sewing.close(g.frame(state))
             unwelded += merged
             if unwelded and (unwelded >= WELD_BATCH * len(sewing.pairs) or not merged or not sewing.sewing_count):
