@@ -17,19 +17,40 @@ not. Moves are averaged per vertex (Jacobi) and the check runs again, a few roun
 round that does not lower the number of crossings is undone and ends the call, so untangling never
 makes a tangle worse (a knot these local moves cannot undo stays). Velocities are left alone: the
 next self-collision pass, told the new positions, takes them as the sides to keep.
+
+What the local pushes leave is then looked at globally, as Baraff, Witkin & Kass's global
+intersection analysis does: the crossing edges are where the intersection contour cuts the
+cloth, so with them removed from the mesh's edge graph, a closed contour cuts off a region of
+vertices from the rest of its piece (a pocket of cloth pushed through a sheet, many vertices
+deep, of which only the rim touches a crossing). The region lies on the wrong side: the crossed
+triangles' normals, each oriented towards the side the crossing edge's outer end is on, average
+to the way back, and every region vertex short of ``thickness`` past the mean crossing point
+along it is moved there (:func:`_region_moves`). Regions are tried smallest first, each kept only
+when it lowers the number of crossings; a region holding more than :data:`MAX_REGION` of its
+piece is never moved (a sheet cut in two by another has no wrong side to tell).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
 from .crossings import edge_crossings
 from .grid import vertex_rings
 
-__all__ = ["untangle", "vertex_rings", "UNTANGLE_ROUNDS"]
+__all__ = ["untangle", "cut_regions", "vertex_rings", "UNTANGLE_ROUNDS", "MAX_REGION"]
 
 UNTANGLE_ROUNDS = 4
 """Rounds of check and push per call: a poke-through takes one, a fold crossed over two or three."""
+
+GLOBAL_PASSES = 3
+"""Local rounds and region moves alternate at most this often per call (each region moved lets the
+local pushes finish its rim)."""
+
+MAX_REGION = 0.25
+"""Largest share of its piece's vertices a region cut off by crossings may hold to be moved back."""
 
 
 def _ring_sums(x, rings, ends, other, tri, point, normal):
@@ -87,23 +108,83 @@ def _push(x, inv_mass, faces, crossings, rings, thickness, joint):
     x += move / np.maximum(count, 1.0)[:, None]
 
 
-def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROUNDS, rings=None):
-    """Push apart, in place, the edges of ``faces`` that pass through their own triangles at ``x``.
+def _components(n: int, edges) -> np.ndarray:
+    """Connected-component label of each of ``n`` vertices joined by ``edges`` (E, 2)."""
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
 
-    ``inv_mass`` (N,) is 1/m per vertex (0: pinned or attached). Returns (crossings found, crossings
-    left): both from :func:`~tailor.collide.crossings.edge_crossings`, before the first and after the
-    last round.
-    """
-    faces = np.asarray(faces, np.int64)
-    rings = vertex_rings(faces, len(x)) if rings is None else rings
-    crossings = edge_crossings(x, faces)
-    found = len(crossings)
+
+def cut_regions(n: int, faces, crossings) -> list:
+    """Vertex ids of each region the ``crossings`` (K, 3: edge ends, triangle) cut off from its piece
+    of the mesh ``faces`` over ``n`` vertices, smallest first: the components of the edge graph less
+    the crossing edges, bar each piece's largest, holding at most :data:`MAX_REGION` of the piece."""
+    edges = np.unique(np.sort(np.asarray(faces, np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    cut = np.unique(np.sort(np.asarray(crossings, np.int64)[:, :2], axis=1), axis=0)
+    keep = ~np.isin(edges[:, 0] * n + edges[:, 1], cut[:, 0] * n + cut[:, 1])
+    piece, part = _components(n, edges), _components(n, edges[keep])
+    piece_size = np.bincount(piece)
+    part_size = np.bincount(part)
+    part_piece = np.zeros(len(part_size), np.int64)
+    part_piece[part] = piece
+    biggest = np.zeros(len(piece_size), np.int64)
+    np.maximum.at(biggest, part_piece, part_size)
+    small = (part_size <= MAX_REGION * piece_size[part_piece]) & (part_size < biggest[part_piece])
+    regions = [np.flatnonzero(part == p) for p in np.flatnonzero(small)]
+    return sorted(regions, key=len)
+
+
+def _region_moves(x, faces, region, crossings, thickness: float):
+    """(N, 3) moves taking a cut-off ``region`` back through the cloth it crossed (module docstring),
+    or None when no crossing bounds it."""
+    inside = np.zeros(len(x), bool)
+    inside[region] = True
+    i, j, t = np.asarray(crossings, np.int64).T
+    rim = inside[i] != inside[j]
+    if not rim.any():
+        return None
+    k, out = np.where(inside[i], i, j)[rim], np.where(inside[i], j, i)[rim]
+    tri = x[faces[t[rim]]]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    point = tri.mean(axis=1)
+    normal *= np.where(np.einsum("ij,ij->i", x[out] - point, normal) >= 0.0, 1.0, -1.0)[:, None]
+    way = normal.sum(axis=0)
+    if not np.linalg.norm(way):
+        return None
+    way /= np.linalg.norm(way)
+    lo = float((point @ way).mean())  # about where the crossed cloth lies
+    depth = np.maximum(lo + thickness - x[region] @ way, 0.0)
+    moves = np.zeros_like(x)
+    moves[region] = depth[:, None] * way
+    return moves
+
+
+def _untangle_regions(x, faces, inv_mass, thickness: float, crossings):
+    """The regions the ``crossings`` cut off moved back, in place, each kept only when the crossings
+    drop; the crossings left."""
+    for region in cut_regions(len(x), faces, crossings):
+        region = region[inv_mass[region] > 0]
+        moves = _region_moves(x, faces, region, crossings, thickness) if len(region) else None
+        if moves is None:
+            continue
+        after = edge_crossings(x + moves, faces)
+        if len(after) < len(crossings):
+            x += moves
+            crossings = after
+        if not len(crossings):
+            break
+    return crossings
+
+
+def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, rounds: int):
+    """Up to ``rounds`` rounds of local pushes, in place, each kept only when the crossings drop;
+    the crossings left."""
     for _ in range(rounds):
         if not len(crossings):
             break
         for joint in (True, False):  # every crossing by both ends' side; only the clear pokes when that is stuck
             y = x.copy()
-            _push(y, np.asarray(inv_mass, float), faces, crossings, rings, thickness, joint)
+            _push(y, inv_mass, faces, crossings, rings, thickness, joint)
             after = edge_crossings(y, faces)
             if len(after) < len(crossings):
                 break
@@ -111,4 +192,29 @@ def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROU
             break
         x[:] = y
         crossings = after
+    return crossings
+
+
+def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROUNDS, rings=None):
+    """Push apart, in place, the edges of ``faces`` that pass through their own triangles at ``x``:
+    rounds of local pushes, then the regions cut off by what is left moved back, and again while
+    that helps (at most :data:`GLOBAL_PASSES` times).
+
+    ``inv_mass`` (N,) is 1/m per vertex (0: pinned or attached). Returns (crossings found, crossings
+    left): both from :func:`~tailor.collide.crossings.edge_crossings`, before the first and after the
+    last round.
+    """
+    faces = np.asarray(faces, np.int64)
+    inv_mass = np.asarray(inv_mass, float)
+    rings = vertex_rings(faces, len(x)) if rings is None else rings
+    crossings = edge_crossings(x, faces)
+    found = len(crossings)
+    for _ in range(GLOBAL_PASSES):
+        crossings = _local_rounds(x, faces, inv_mass, thickness, crossings, rings, rounds)
+        if not len(crossings):
+            break
+        before = len(crossings)
+        crossings = _untangle_regions(x, faces, inv_mass, thickness, crossings)
+        if len(crossings) == before:
+            break
     return found, len(crossings)
