@@ -182,6 +182,20 @@ def test_garmentcode_bottoms_sew_at_the_default_resolution(garmentcode_dir, name
     assert abs(result.frames[-1][band, 2].max() - waist) < 0.03
 
 
+@pytest.mark.slow
+def test_garmentcode_dress_sews_at_the_default_resolution(garmentcode_dir):
+    """At 2 cm its skirt's top and bodice's bottom crossed each other by the hundred between welds
+    while the waist seams closed (nothing untangled them until the next weld), and the tangle threw
+    the side seam's corner 7 cm out of the body; untangled every sewing frame, it sews."""
+    pattern = read_pattern(garmentcode_dir / "dress_fitted_circle_specification.json")
+    result = drape(pattern, read_body("mannequin-walk"), frames=3, resolution=0.02)
+    assert _one_piece(result) and max(result.report.crossings_per_frame) == 0
+    assert result.report.max_penetration_m <= 0.001
+    assert result.report.phases["sewing"].extra["max_gap_at_merge_m"] <= 0.02
+    shoulders = find_landmarks(result.body_frames[-1], result.body_faces)["shoulders"].height
+    assert result.frames[-1][:, 2].max() > shoulders - 0.03  # hanging from the shoulders
+
+
 def test_a_garmentcode_waistband_stays_at_the_waist(mannequin):
     """A band lighter than the skirt sewn to it used to be drawn down to the skirt while sewing and
     then slide over the hips (GarmentCode's skirts ended 14 cm low): its labelled waist edge now

@@ -208,3 +208,34 @@ def test_a_skirt_sews_to_its_bodice_after_the_bodice_closes():
     seam_of_pair = garment.sewing.seam
     assert set(seam_of_pair[first]) == {0} and set(seam_of_pair[~first]) == {1}
     assert plan(gc_skirt_doc())[2].stages == 1
+
+
+def test_cloth_crossed_while_sewing_is_untangled_that_frame_not_at_the_next_weld(mannequin):
+    """A vertex of the placed skirt pushed through a neighbouring panel: the self-collision keeps
+    the side it finds, so only untangling undoes it. Sewing untangles every frame (a dress's skirt
+    top slid over its bodice's bottom by the hundred between two welds), so the first sewing frame
+    written, before any weld, already has no crossing."""
+    from tailor.collide import edge_crossings
+    from tailor.dress.phases import sew
+
+    pattern = read_pattern(PANELS / "skirt.json")
+    frames = []
+    d, _, x0 = prepare(pattern, mannequin, DrapeOptions(resolution=0.08, frames=1, record_sewing=True),
+                       on_frame=lambda i, x, bx: frames.append((x.copy(), d.garment.rebuilds)))
+    mesh, x0 = d.garment.mesh, x0.copy()
+    seam = np.zeros(mesh.vertex_count, bool)
+    seam[np.asarray(mesh.seam_pairs).ravel()] = True
+    faces, panel = np.asarray(mesh.faces), np.asarray(mesh.vertex_panel)
+    v = np.flatnonzero(~seam & (panel == 0))[0]  # inside the first panel, on no seam
+    other = faces[panel[faces[:, 0]] != 0]
+    centre = x0[other].mean(axis=1)
+    t = int(np.argmin(np.linalg.norm(centre - x0[v], axis=1)))
+    a, b, c = x0[other[t]]
+    normal = np.cross(b - a, c - a) / np.linalg.norm(np.cross(b - a, c - a))
+    side = np.sign((x0[v] - centre[t]) @ normal)
+    x0[v] = centre[t] - side * 0.005 * normal  # 5 mm past the nearest other panel
+    assert len(edge_crossings(x0, faces)) > 0
+    sew(d, x0)
+    x, rebuilds = frames[0]
+    assert rebuilds == 0  # written before the first weld
+    assert len(edge_crossings(x, faces)) == 0

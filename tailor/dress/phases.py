@@ -3,10 +3,9 @@
 1. :func:`sew` — body still, gravity off, seaming forces (Eq. 15) pull the placed panels together
    and pairs merge (Eq. 16–18) until every seam is closed, or a time-out raises
    :class:`~tailor.errors.SimulationError` naming the widest open seam; the panels keep each other
-   out (self-collision) except along the open seams;
+   out (self-collision) except along the open seams, and the cloth's crossings through itself are
+   untangled every frame (:meth:`~tailor.contact.ContactPipeline.untangle`), as in every phase;
 2. :func:`settle` — gravity on, attachments hold (Eq. 19–20), the garment comes to rest;
-   from here on (and at every weld) the cloth's crossings through itself are untangled every frame
-   (:meth:`~tailor.contact.ContactPipeline.untangle`);
 3. :func:`transition` — a body dressed in its neutral pose moves into its motion's first frame;
 4. :func:`animate` — the body moves; one frame every 1/fps s, frame 0 being the dressed garment.
 
@@ -192,6 +191,8 @@ def sew(d: Dressing, x0):
             unwelded += merged
             if unwelded and (unwelded >= WELD_BATCH * len(sewing.pairs) or not merged or not sewing.sewing_count):
                 state, unwelded = d.weld(state), 0
+            else:  # panels closing in on each other cross between welds too (a skirt's top over a bodice's)
+                d.contacts.untangle(g.model, state)
             if d.options.record_sewing:
                 d.emit(state, d.timeline.pose)
             d.tell(len(sewing.pairs) - sewing.open_count, len(sewing.pairs), state)
