@@ -141,8 +141,9 @@ def test_a_narrower_tshirt_is_tighter_at_the_bust_and_a_wider_one_looser():
     bust = {w: fit_map(drape(_tshirt(w), body, frames=2, resolution=RES)).at_landmark("bust") for w in (0.9, 1.0, 1.1)}
     assert bust[0.9]["pressure_kpa"] > bust[1.0]["pressure_kpa"] > bust[1.1]["pressure_kpa"], bust
     # the tight one is stretched round the bust; the two loose ones only by their own weight, alike
+    # (within half the point by which the tight one must stand out: their folds differ)
     assert bust[0.9]["stretch_pct"] > max(bust[1.0]["stretch_pct"], bust[1.1]["stretch_pct"]) + 1.0, bust
-    assert bust[1.1]["stretch_pct"] < bust[1.0]["stretch_pct"] + 0.2, bust
+    assert bust[1.1]["stretch_pct"] < bust[1.0]["stretch_pct"] + 0.5, bust
     # a loose one hangs in folds its section's hull does not follow in full: more ease, not 10 % more
     assert bust[0.9]["ease_cm"] < bust[1.0]["ease_cm"] - 3 < bust[1.1]["ease_cm"] - 3, bust
 
