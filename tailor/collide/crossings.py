@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .grid import Grid, bin_boxes, cell_span
+from .grid import Grid, bin_boxes, cell_span, unique_edges
 
 __all__ = ["edge_crossings"]
 
@@ -91,10 +91,7 @@ def edge_crossings(vertices, faces) -> np.ndarray:
     faces = np.ascontiguousarray(faces, dtype=np.int64)
     if not len(faces):
         return np.zeros((0, 3), np.int64)
-    e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    n = len(x)
-    keys = np.unique(e[:, 0] * n + e[:, 1])  # one integer per edge: far quicker than rows
-    edges = np.column_stack([keys // n, keys % n])
+    edges = unique_edges(faces, len(x))
     length = np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1)
     cell = max(2.0 * float(np.mean(length)), 1e-6)
     used = x[np.unique(edges)]

@@ -58,6 +58,14 @@ def _sweep(lo, hi, order, fill, out_i, out_j):
     return found
 
 
+def unique_edges(faces, n: int) -> np.ndarray:
+    """(E, 2) each undirected edge of ``faces`` over ``n`` vertices once, lower index first, sorted
+    (one integer key per edge: far quicker than ``np.unique`` on rows)."""
+    e = np.sort(np.asarray(faces, np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    keys = np.unique(e[:, 0] * n + e[:, 1])
+    return np.column_stack([keys // n, keys % n])
+
+
 def vertex_rings(faces, n: int):
     """CSR (ptr, idx) of each vertex's neighbours across an edge of ``faces``."""
     e = np.asarray(faces, np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)

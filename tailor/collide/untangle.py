@@ -24,8 +24,8 @@ cloth, so with them removed from the mesh's edge graph, a closed contour cuts of
 vertices from the rest of its piece (a pocket of cloth pushed through a sheet, many vertices
 deep, of which only the rim touches a crossing). The region lies on the wrong side: the crossed
 triangles' normals, each oriented towards the side the crossing edge's outer end is on, average
-to the way back, and every region vertex short of ``thickness`` past the mean crossing point
-along it is moved there (:func:`_region_moves`). Regions are tried smallest first, each kept only
+to the way back, and every region vertex short of ``thickness`` past the crossed triangles'
+mean centre along it is moved there (:func:`_region_moves`). Regions are tried smallest first, each kept only
 when it lowers the number of crossings; a region holding more than :data:`MAX_REGION` of its
 piece is never moved (a sheet cut in two by another has no wrong side to tell).
 """
@@ -33,12 +33,11 @@ piece is never moved (a sheet cut in two by another has no wrong side to tell).
 from __future__ import annotations
 
 import numpy as np
-
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from .crossings import edge_crossings
-from .grid import vertex_rings
+from .grid import unique_edges, vertex_rings
 
 __all__ = ["untangle", "cut_regions", "vertex_rings", "UNTANGLE_ROUNDS", "MAX_REGION"]
 
@@ -118,7 +117,7 @@ def cut_regions(n: int, faces, crossings) -> list:
     """Vertex ids of each region the ``crossings`` (K, 3: edge ends, triangle) cut off from its piece
     of the mesh ``faces`` over ``n`` vertices, smallest first: the components of the edge graph less
     the crossing edges, bar each piece's largest, holding at most :data:`MAX_REGION` of the piece."""
-    edges = np.unique(np.sort(np.asarray(faces, np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    edges = unique_edges(faces, n)
     cut = np.unique(np.sort(np.asarray(crossings, np.int64)[:, :2], axis=1), axis=0)
     keep = ~np.isin(edges[:, 0] * n + edges[:, 1], cut[:, 0] * n + cut[:, 1])
     piece, part = _components(n, edges), _components(n, edges[keep])
