@@ -294,25 +294,38 @@ class ContactPipeline:
         self.loads.add(model, dt, support, response)
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x, bx)
-            collider.ignore(self._open_seams(model))
+            collider.ignore(*self._open_seams(model))
             # pinned (attached, or an outfit's garment waiting to sew) vertices do not move: read each
             # step, since pins change without the vertex count changing
             collider.respond(np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass)), state, dt)
 
     def _open_seams(self, model):
-        """(N,) bool: the vertices of the open seam pairs and their neighbours (None: none open), which
-        the self-collision leaves free while sewing so that each seam's two sides meet edge to edge."""
-        pairs = model.pair_vertices
+        """((N,) bool, (K, 2) int) while sewing (None, None: no seam open): the vertices of the open seam
+        pairs and their neighbours, which the self-collision leaves free so that each seam's two sides
+        meet edge to edge, and the vertex pairs among them that keep contact all the same: each pair's
+        neighbours on one side against its neighbours on the other (the pair's own two vertices left
+        out), so that the two sides do not fold through each other as they close."""
+        pairs = np.asarray(model.pair_vertices, np.int64)
         if not len(pairs):
-            return None
+            return None, None
         ptr, nbr = self._neighbours(model)
         mask = np.zeros(model.vertex_count, bool)
         mask[pairs.ravel()] = True
-        ids = np.flatnonzero(mask)
-        lens = ptr[ids + 1] - ptr[ids]
-        rows = np.repeat(ptr[ids] - np.concatenate([[0], np.cumsum(lens)[:-1]]), lens) + np.arange(lens.sum())
-        mask[nbr[rows]] = True
-        return mask
+        sides = []
+        for end in (pairs[:, 0], pairs[:, 1]):
+            lens = ptr[end + 1] - ptr[end]
+            rows = np.repeat(ptr[end] - np.r_[0, np.cumsum(lens)[:-1]], lens) + np.arange(lens.sum())
+            sides.append((np.repeat(np.arange(len(end)), lens), nbr[rows]))
+        (pa, va), (pb, vb) = sides
+        outer = ~mask
+        mask[va] = mask[vb] = True
+        pa, va = pa[outer[va]], va[outer[va]]
+        pb, vb = pb[outer[vb]], vb[outer[vb]]
+        order = np.argsort(pb, kind="stable")
+        starts = np.searchsorted(pb[order], np.arange(len(pairs) + 1))
+        count = starts[pa + 1] - starts[pa]  # each side-a neighbour against its pair's side-b neighbours
+        rows = np.repeat(starts[pa] - np.r_[0, np.cumsum(count)[:-1]], count) + np.arange(count.sum())
+        return mask, np.column_stack([np.repeat(va, count), vb[order][rows]])
 
     def _neighbours(self, model):
         """Each vertex's neighbours across an edge (CSR), for ``model``'s numbering (kept for untangling too)."""

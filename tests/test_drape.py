@@ -196,6 +196,16 @@ def test_garmentcode_dress_sews_at_the_default_resolution(garmentcode_dir):
     assert result.frames[-1][:, 2].max() > shoulders - 0.03  # hanging from the shoulders
 
 
+@pytest.mark.slow
+def test_the_readme_skirt_at_normal_quality_sews_without_crossing_itself():
+    """Its side seams' hem corners folded through each other as they zipped shut (the seam's free
+    zone let the two sides' neighbourhoods pass), leaving 24 crossings that settling at ``normal``
+    could not undo; the two sides' rings now keep out of each other."""
+    result = drape(read_pattern(PANELS / "skirt.json"), read_body("mannequin-walk"), frames=2, resolution=0.02,
+                   quality="normal")
+    assert max(result.report.crossings_per_frame) == 0
+
+
 def test_a_garmentcode_waistband_stays_at_the_waist(mannequin):
     """A band lighter than the skirt sewn to it used to be drawn down to the skirt while sewing and
     then slide over the hips (GarmentCode's skirts ended 14 cm low): its labelled waist edge now

@@ -191,6 +191,39 @@ def test_ignored_vertices_take_no_part_in_any_contact():
     assert counts[0] > 0 and counts[1] == 0 and counts[2] == 0 and counts[3] == counts[0]
 
 
+def test_an_open_seams_two_sides_keep_out_of_each_other_but_its_pairs_meet():
+    """The neighbourhoods of an open seam's two sides are left free of the rest of the cloth, but
+    not of each other: ignored with their pairs kept, a panel falling onto another is caught; the
+    contacts are only those between kept pairs, so a kept pair's own vertices still meet freely."""
+    model, x0 = stacked(0.002, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    v0 = np.zeros_like(x0)
+    v0[upper, 2] = -1.0
+    a, b = np.flatnonzero(~upper), np.flatnonzero(upper)
+    everything = np.column_stack([np.repeat(a, len(b)), np.tile(b, len(a))])
+    counts = []
+    for keep in (None, everything, everything[1::2]):
+        state = model.state(x0.copy(), v0.copy())
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+        collider.ignore(np.ones(len(x0), bool), keep)
+        counts.append(collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01))
+    assert counts[0] == 0 and counts[1] > 0 and 0 < counts[2] <= counts[1]
+
+
+def test_the_open_seams_free_zone_keeps_each_pairs_two_neighbourhoods_apart():
+    """ContactPipeline's zone round the open pairs: the pair vertices and their 1-rings are free,
+    and each pair's ring on one side keeps contact with its ring on the other, its own two vertices
+    left out (they must meet)."""
+    from types import SimpleNamespace
+    from tailor.contact import ContactPipeline
+
+    faces = np.array([[0, 1, 3], [1, 4, 3], [1, 2, 4], [2, 5, 4], [6, 7, 8]])
+    model = SimpleNamespace(pair_vertices=np.array([[0, 5]]), faces=faces, vertex_count=9)
+    mask, kept = ContactPipeline(None, None, thickness=0.003, friction=0.1)._open_seams(model)
+    assert mask.tolist() == [True] * 6 + [False] * 3
+    assert sorted(map(tuple, kept.tolist())) == [(1, 2), (1, 4), (3, 2), (3, 4)]
+
+
 def test_an_outfits_layers_put_an_outer_panel_caught_behind_an_inner_one_back_outside():
     """Side memory keeps a pair on the side it was on; an outfit's layers (Layers) keep the outer
     garment outside even where it already started the step a millimetre behind the inner one."""

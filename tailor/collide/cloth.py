@@ -221,6 +221,7 @@ class SelfCollider:
         self._ee_toward = np.zeros((0, 3))
         self._x_prev = None
         self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
+        self._kept = None  # sorted vertex-pair keys that keep contact though ignored
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1,
                       "query_s": 0.0, "response_s": 0.0}
 
@@ -337,24 +338,41 @@ class SelfCollider:
         self._tri_side = self.layers.vertex_triangle_sides(self._vertex_layer, self._vtx, self._tri)
         self._ee_toward = self.layers.edge_directions(self._vertex_layer, self.faces, x, self._ee)
 
-    def ignore(self, vertices) -> None:
+    def ignore(self, vertices, keep=None) -> None:
         """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact, as a
-        vertex, a triangle's corner or an edge's end: the open seams while sewing, whose two sides
-        must be free to meet edge to edge; the rest of the panels keep each other out."""
+        vertex, a triangle's corner or an edge's end, except between the vertex pairs ``keep`` ((K, 2)):
+        the open seams while sewing, whose two sides must be free to meet edge to edge, while the
+        neighbourhoods of a seam's two sides still keep out of each other."""
         mask = None if vertices is None or not np.any(vertices) else np.asarray(vertices, bool)
+        keys = None
+        if mask is not None and keep is not None and len(keep):
+            p = np.asarray(keep, np.int64).reshape(-1, 2)
+            keys = unique_ints(np.r_[p[:, 0] * self.n + p[:, 1], p[:, 1] * self.n + p[:, 0]])
         same = (mask is None and self._ignored is None) or (
-            mask is not None and self._ignored is not None and np.array_equal(mask, self._ignored))
+            mask is not None and self._ignored is not None and np.array_equal(mask, self._ignored)
+            and np.array_equal(keys, self._kept))
         if not same:
-            self._ignored = mask
+            self._ignored, self._kept = mask, keys
             self._anchor = None  # query again
 
+    def _is_kept(self, a, b):
+        """Whether each vertex pair (a, b) keeps contact though ignored (:meth:`ignore`)."""
+        if self._kept is None:
+            return np.zeros(np.broadcast(a, b).shape, bool)
+        q = a * self.n + b
+        at = np.minimum(np.searchsorted(self._kept, q), len(self._kept) - 1)
+        return self._kept[at] == q
+
     def _drop_ignored(self, vertex, tri, near):
-        """The vertex–triangle and edge–edge candidates without the ignored vertices."""
+        """The vertex–triangle and edge–edge candidates without the ignored vertices (but the kept pairs)."""
         if self._ignored is None:
             return vertex, tri, near
-        keep = ~self._ignored[vertex] & ~self._ignored[self.faces[tri]].any(axis=1)
+        corners = self.faces[tri]
+        keep = ~self._ignored[vertex] & ~self._ignored[corners].any(axis=1)
+        keep |= self._is_kept(vertex[:, None], corners).any(axis=1)
         if len(self._ee):
-            ee = ~self._ignored[self._ee].any(axis=1)
+            a, b = self._ee[:, :2], self._ee[:, 2:]
+            ee = ~self._ignored[self._ee].any(axis=1) | self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), -1).any(axis=1)
             self._ee, self._ee_near = self._ee[ee], self._ee_near[ee]
         return vertex[keep], tri[keep], near[keep]
 
