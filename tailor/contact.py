@@ -54,7 +54,7 @@ class ContactSettings:
         Hand resting body contacts to the next implicit step and predict landings within it.
     self_collision : bool
         Whether cloth–cloth contact acts (while sewing it leaves the open seams and their
-        neighbours free, :meth:`ContactPipeline.respond`: seam edges must be free to meet).
+        neighbours free, :meth:`ContactPipeline._open_seams`: seam edges must be free to meet).
     layers : bool
         Whether contact between an outfit's garments keeps their order whatever side they are on
         (:class:`~tailor.collide.Layers`); off while sewing, where open seams pass through the

@@ -144,7 +144,8 @@ class PhaseSettings:
 SEWING = PhaseSettings(
     "sewing", gravity=False,
     # panels slide over the body into place without friction; seam edges must be free to meet (the
-    # self-collision leaves the open seams and their neighbours free, and keeps the rest apart)
+    # self-collision leaves the open seams and their neighbours free, but not the two sides'
+    # neighbourhoods of one pair against each other, and keeps the rest apart)
     contact=ContactSettings(friction_scale=0.0, hold=False, self_collision=True, layers=False),
     # sewing is assembly at the same step in every preset, with stiff seam springs pulling panels
     # metres: a loose solve there blows up (docs/measurements.md)
