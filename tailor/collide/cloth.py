@@ -58,7 +58,6 @@ import scipy.sparse as sp
 
 from ..errors import SimulationUnstable
 from ..geometry import vertex_normals
-from .broad import corner_bounds
 from .cloth_kernels import PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts, unique_ints
 from .grid import edge_edge_pairs, overlapping_boxes, vertex_rings, vertex_triangle_pairs
 
@@ -236,6 +235,10 @@ class SelfCollider:
         self.patch_count = int(patch.max()) + 1 if len(patch) else 0
         self._order = np.argsort(patch, kind="stable")
         self._starts = np.searchsorted(patch[self._order], np.arange(self.patch_count))
+        # each patch's vertices (CSR, grouped by patch): its box is theirs, a sixth of the faces' corners
+        corner_keys = unique_ints(np.repeat(patch, 3).astype(np.int64) * max(self.n, 1) + self.faces.ravel())
+        self._patch_vertices = corner_keys % max(self.n, 1)
+        self._patch_vertex_starts = np.searchsorted(corner_keys // max(self.n, 1), np.arange(self.patch_count))
         # patches sharing a vertex are neighbours
         near = _shared_vertex_pairs(self.faces.ravel(), np.repeat(patch, 3), self.patch_count)
         # neighbours of neighbours too: patches whose corners merely touch are not a fold either
@@ -251,12 +254,9 @@ class SelfCollider:
         if self.mode == "on" or self.patch_count <= 1:
             return np.arange(len(self.faces))
         corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
-        if vertex_boxes is None:
-            lo, hi = corner_bounds(corners)
-        else:
-            lo = corner_bounds(vertex_boxes[0][self.faces[self._order]])[0]
-            hi = corner_bounds(vertex_boxes[1][self.faces[self._order]])[1]
-        lo, hi = np.minimum.reduceat(lo, self._starts), np.maximum.reduceat(hi, self._starts)
+        lo, hi = (x, x) if vertex_boxes is None else vertex_boxes
+        lo = np.minimum.reduceat(lo[self._patch_vertices], self._patch_vertex_starts)
+        hi = np.maximum.reduceat(hi[self._patch_vertices], self._patch_vertex_starts)
         e1 = corners[:, 1] - corners[:, 0]
         e2 = corners[:, 2] - corners[:, 0]
         fn = np.cross(e1, e2)  # area-weighted normals
@@ -271,7 +271,8 @@ class SelfCollider:
         i, j = overlapping_boxes(lo - pad, hi + pad)
         if len(i):
             key = np.minimum(i, j) * self.patch_count + np.maximum(i, j)
-            adjacent = np.isin(key, self._adjacent)
+            at = np.minimum(np.searchsorted(self._adjacent, key), len(self._adjacent) - 1)
+            adjacent = self._adjacent[at] == key  # sorted keys: a binary search, not np.isin's sort
             between = np.arccos(np.clip(np.einsum("ij,ij->i", mean[i], mean[j]), -1.0, 1.0))
             folded = 0.5 * between + np.maximum(spread[i], spread[j]) > limit
             hit = ~adjacent | folded
