@@ -317,10 +317,10 @@ class ContactPipeline:
             rows = np.repeat(ptr[end] - np.r_[0, np.cumsum(lens)[:-1]], lens) + np.arange(lens.sum())
             sides.append((np.repeat(np.arange(len(end)), lens), nbr[rows]))
         (pa, va), (pb, vb) = sides
-        outer = ~mask
+        ring = ~mask  # not a pair's own vertex
         mask[va] = mask[vb] = True
-        pa, va = pa[outer[va]], va[outer[va]]
-        pb, vb = pb[outer[vb]], vb[outer[vb]]
+        pa, va = pa[ring[va]], va[ring[va]]
+        pb, vb = pb[ring[vb]], vb[ring[vb]]
         order = np.argsort(pb, kind="stable")
         starts = np.searchsorted(pb[order], np.arange(len(pairs) + 1))
         count = starts[pa + 1] - starts[pa]  # each side-a neighbour against its pair's side-b neighbours

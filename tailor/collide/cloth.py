@@ -158,6 +158,13 @@ class Layers:
         return out
 
 
+def in_sorted(keys, q):
+    """Whether each of ``q`` is in the sorted, non-empty 1-D array ``keys``: a binary search
+    (``np.isin`` sorts both arrays on every call)."""
+    at = np.minimum(np.searchsorted(keys, q), len(keys) - 1)
+    return keys[at] == q
+
+
 class SelfCollider:
     """Self-collision of one cloth mesh (module docstring).
 
@@ -271,8 +278,7 @@ class SelfCollider:
         i, j = overlapping_boxes(lo - pad, hi + pad)
         if len(i):
             key = np.minimum(i, j) * self.patch_count + np.maximum(i, j)
-            at = np.minimum(np.searchsorted(self._adjacent, key), len(self._adjacent) - 1)
-            adjacent = self._adjacent[at] == key  # sorted keys: a binary search, not np.isin's sort
+            adjacent = in_sorted(self._adjacent, key)
             between = np.arccos(np.clip(np.einsum("ij,ij->i", mean[i], mean[j]), -1.0, 1.0))
             folded = 0.5 * between + np.maximum(spread[i], spread[j]) > limit
             hit = ~adjacent | folded
@@ -360,9 +366,7 @@ class SelfCollider:
         """Whether each vertex pair (a, b) keeps contact though ignored (:meth:`ignore`)."""
         if self._kept is None:
             return np.zeros(np.broadcast(a, b).shape, bool)
-        q = a * self.n + b
-        at = np.minimum(np.searchsorted(self._kept, q), len(self._kept) - 1)
-        return self._kept[at] == q
+        return in_sorted(self._kept, a * self.n + b)
 
     def _drop_ignored(self, vertex, tri, near):
         """The vertex–triangle and edge–edge candidates without the ignored vertices (but the kept pairs)."""
