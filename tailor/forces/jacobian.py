@@ -17,6 +17,8 @@ kernels over element colour classes); :func:`force_jacobians` gives K and C as C
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -67,19 +69,30 @@ class SparsePattern:
         self._diag_block = inverse[-nv:]  # the identity keys came last
         self.diagonal_slots = slots[self._diag_block][:, a3, a3].reshape(-1)
         """CSR slot of each diagonal entry (dof order)."""
-        self.positions, self.element_blocks, start = [], [], 0
-        for g in groups:  # slot of every entry of every element's (3k × 3k) block
+        self.element_blocks, start = [], 0
+        for g in groups:  # block of every vertex pair of every element
             e, k = g.shape
-            p = inverse[start : start + e * k * k].reshape(e, k, k)
+            self.element_blocks.append(np.ascontiguousarray(inverse[start : start + e * k * k].reshape(e, k, k), dtype=np.int64))
             start += e * k * k
-            self.positions.append(slots[p].transpose(0, 1, 3, 2, 4).reshape(e, 9 * k * k).astype(np.int64))
-            self.element_blocks.append(np.ascontiguousarray(p, dtype=np.int64))
-        """Per element group (faces or springs, then hinges, then pairs): CSR slot of each block entry, (E, (3k)²)."""
+        """Per element group (faces or springs, then hinges, then pairs): block index of each of its
+        vertex pairs, (E, k, k)."""
         self.block_rows = bi.astype(np.int64)
         """Row (vertex) of every 3×3 block, in :meth:`blocks` order."""
         self._groups = groups
         self._colors = [None] * len(groups)
-        self.scatter = np.concatenate([pos.reshape(-1) for pos in self.positions] + [self.diagonal_slots])
+
+    @cached_property
+    def positions(self) -> list:
+        """Per element group: CSR slot of each entry of each element's (3k × 3k) block, (E, (3k)²).
+        Made on first use: the implicit step assembles blocks and never needs them (at 2 cm they
+        are about 9 KB a vertex)."""
+        slots = self._block_slots.reshape(-1, 3, 3)
+        return [slots[p].transpose(0, 1, 3, 2, 4).reshape(len(p), -1).astype(np.int64) for p in self.element_blocks]
+
+    @cached_property
+    def scatter(self) -> np.ndarray:
+        """CSR slot of every concatenated element entry, the diagonal identity slots last (:meth:`matrix`)."""
+        return np.concatenate([pos.reshape(-1) for pos in self.positions] + [self.diagonal_slots])
 
     def colors(self, group: int):
         """(order, ptr) of element group ``group`` in classes that share no vertex (:func:`element_colors`), made once."""
