@@ -84,8 +84,8 @@ class SparsePattern:
     @cached_property
     def positions(self) -> list:
         """Per element group: CSR slot of each entry of each element's (3k × 3k) block, (E, (3k)²).
-        Made on first use: the implicit step assembles blocks and never needs them (at 2 cm they
-        are about 9 KB a vertex)."""
+        Made on first use: the implicit step assembles blocks and never needs them (the largest
+        arrays of the pattern)."""
         slots = self._block_slots.reshape(-1, 3, 3)
         return [slots[p].transpose(0, 1, 3, 2, 4).reshape(len(p), -1).astype(np.int64) for p in self.element_blocks]
 
