@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from tailor.collide.closest import closest_barycentric
-from tailor.collide.grid import MAX_CELLS, Grid, edge_edge_pairs, vertex_triangle_pairs
+from tailor.collide.grid import MAX_CELLS, Grid, bin_boxes, edge_edge_pairs, vertex_triangle_pairs
 
 
 def _soup(rng, n=300, faces=400, spread=0.3):
@@ -84,3 +84,19 @@ def test_overlapping_boxes_are_the_pairs_brute_force_finds():
     meet = np.all((lo[:, None] <= hi[None]) & (lo[None] <= hi[:, None]), axis=2)
     expected = {(a, b) for a, b in zip(*np.nonzero(np.triu(meet, 1)))}
     assert set(zip(i.tolist(), j.tolist())) == expected and len(i) == len(expected) and np.all(i < j)
+
+
+def test_binned_boxes_hold_exactly_the_boxes_meeting_each_cell_in_order():
+    rng = np.random.default_rng(7)
+    lo = rng.uniform(0.0, 1.0, (500, 3))
+    hi = lo + rng.uniform(0.0, 0.3, (500, 3))
+    grid = Grid(lo, hi, 0.17)
+    ptr, items = bin_boxes(lo, hi, grid.origin, grid.cell, grid.dims)
+    first = np.clip(np.floor((lo - grid.origin) / grid.cell).astype(int), 0, grid.dims - 1)
+    last = np.clip(np.floor((hi - grid.origin) / grid.cell).astype(int), 0, grid.dims - 1)
+    assert len(ptr) == np.prod(grid.dims) + 1
+    for key in range(np.prod(grid.dims)):
+        a, b, c = key % grid.dims[0], (key // grid.dims[0]) % grid.dims[1], key // (grid.dims[0] * grid.dims[1])
+        cell = np.array([a, b, c])
+        expected = np.flatnonzero(np.all((first <= cell) & (cell <= last), axis=1))
+        assert np.array_equal(items[ptr[key]:ptr[key + 1]], expected)

@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
-from .grid import Grid, bin_boxes, cell_span, unique_edges
+from .grid import Grid, bin_boxes, cell_span, gap2, owns, unique_edges
 
 __all__ = ["edge_crossings"]
 
@@ -49,38 +49,56 @@ def _crosses(p, q, a, b, c):
 
 
 @njit(cache=True)
+def _crossed_by(k, fill, out, start, x, faces, edges, e_lo, e_hi, t_lo, t_hi, ptr, tri, origin, cell, dims):
+    """Count (``fill`` False) or write the triangles edge ``k`` passes through. Each (edge, triangle)
+    pair is tested once: from the cell holding the lower corner of their boxes' overlap."""
+    i, j = edges[k, 0], edges[k, 1]
+    found = 0
+    i0, j0, k0, i1, j1, k1 = cell_span(e_lo[k], e_hi[k], 0.0, origin, cell, dims)
+    for c in range(k0, k1 + 1):
+        for b in range(j0, j1 + 1):
+            for a in range(i0, i1 + 1):
+                key = a + dims[0] * (b + dims[1] * c)
+                for m in range(ptr[key], ptr[key + 1]):
+                    t = tri[m]
+                    f0, f1, f2 = faces[t, 0], faces[t, 1], faces[t, 2]
+                    if f0 == i or f1 == i or f2 == i or f0 == j or f1 == j or f2 == j:
+                        continue
+                    if gap2(e_lo[k], e_hi[k], t_lo[t], t_hi[t]) > 0.0:
+                        continue
+                    if not owns(e_lo[k], t_lo[t], 0.0, a, b, c, origin, cell, dims):
+                        continue
+                    if _crosses(x[i], x[j], x[f0], x[f1], x[f2]):
+                        if fill:
+                            out[start + found] = t
+                        found += 1
+    return found
+
+
+@njit(cache=True, parallel=True)
 def _edge_crossings(x, faces, edges, origin, cell, dims):
+    """(K, 2) rows (edge, triangle) of the crossings, by edge: counted, then written, each a
+    parallel pass over the edges."""
     t_lo = np.empty((len(faces), 3))
     t_hi = np.empty((len(faces), 3))
-    for t in range(len(faces)):
+    for t in prange(len(faces)):
         for e in range(3):
             t_lo[t, e] = min(x[faces[t, 0], e], x[faces[t, 1], e], x[faces[t, 2], e])
             t_hi[t, e] = max(x[faces[t, 0], e], x[faces[t, 1], e], x[faces[t, 2], e])
     ptr, tri = bin_boxes(t_lo, t_hi, origin, cell, dims)
     e_lo = np.minimum(x[edges[:, 0]], x[edges[:, 1]])
     e_hi = np.maximum(x[edges[:, 0]], x[edges[:, 1]])
-    seen = np.full(len(faces), -1, np.int64)  # the last edge each triangle was tested against
-    out = []
-    for k in range(len(edges)):
-        i, j = edges[k, 0], edges[k, 1]
-        i0, j0, k0, i1, j1, k1 = cell_span(e_lo[k], e_hi[k], 0.0, origin, cell, dims)
-        for a in range(i0, i1 + 1):
-            for b in range(j0, j1 + 1):
-                for c in range(k0, k1 + 1):
-                    key = a + dims[0] * (b + dims[1] * c)
-                    for m in range(ptr[key], ptr[key + 1]):
-                        t = tri[m]
-                        if seen[t] == k:
-                            continue
-                        seen[t] = k
-                        f0, f1, f2 = faces[t, 0], faces[t, 1], faces[t, 2]
-                        if f0 == i or f1 == i or f2 == i or f0 == j or f1 == j or f2 == j:
-                            continue
-                        if _crosses(x[i], x[j], x[f0], x[f1], x[f2]):
-                            out.append((k, t))
-    res = np.empty((len(out), 2), np.int64)
-    for n in range(len(out)):
-        res[n, 0], res[n, 1] = out[n]
+    counts = np.zeros(len(edges), np.int64)
+    none = np.zeros(0, np.int64)
+    for k in prange(len(edges)):
+        counts[k] = _crossed_by(k, False, none, 0, x, faces, edges, e_lo, e_hi, t_lo, t_hi, ptr, tri, origin, cell, dims)
+    starts = np.zeros(len(edges) + 1, np.int64)
+    starts[1:] = np.cumsum(counts)
+    res = np.empty((starts[-1], 2), np.int64)
+    for k in prange(len(edges)):
+        if counts[k]:
+            res[starts[k]:starts[k + 1], 0] = k
+            _crossed_by(k, True, res[:, 1], starts[k], x, faces, edges, e_lo, e_hi, t_lo, t_hi, ptr, tri, origin, cell, dims)
     return res
 
 

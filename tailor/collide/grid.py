@@ -19,7 +19,7 @@ from numba import njit, prange
 
 from .closest import closest_barycentric
 
-__all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
+__all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "gap2", "owns", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
 
 MAX_CELLS = 1 << 21
 """Cells a grid holds, about (one more per axis at most: 16 MB of cell pointers); coarser cells beyond."""
@@ -99,30 +99,33 @@ def cell_span(lo, hi, r, origin, cell, dims):
 
 @njit(cache=True)
 def bin_boxes(lo, hi, origin, cell, dims):
-    """CSR (ptr, items) of the boxes (lo[k], hi[k]) meeting each cell."""
-    count = 0
-    for k in range(len(lo)):
-        i0, j0, k0, i1, j1, k1 = cell_span(lo[k], hi[k], 0.0, origin, cell, dims)
-        count += (i1 - i0 + 1) * (j1 - j0 + 1) * (k1 - k0 + 1)
-    keys = np.empty(count, np.int64)
-    items = np.empty(count, np.int64)
-    m = 0
+    """CSR (ptr, items) of the boxes (lo[k], hi[k]) meeting each cell, items in increasing order
+    within a cell: a counting sort over the cells (two passes, no comparison sort)."""
+    cells = dims[0] * dims[1] * dims[2]
+    ptr = np.zeros(cells + 1, np.int64)
     for k in range(len(lo)):
         i0, j0, k0, i1, j1, k1 = cell_span(lo[k], hi[k], 0.0, origin, cell, dims)
         for c in range(k0, k1 + 1):
             for b in range(j0, j1 + 1):
                 for a in range(i0, i1 + 1):
-                    keys[m] = a + dims[0] * (b + dims[1] * c)
-                    items[m] = k
-                    m += 1
-    order = np.argsort(keys, kind="mergesort")
-    keys, items = keys[order], items[order]
-    ptr = np.searchsorted(keys, np.arange(dims[0] * dims[1] * dims[2] + 1))
+                    ptr[a + dims[0] * (b + dims[1] * c) + 1] += 1
+    for m in range(cells):
+        ptr[m + 1] += ptr[m]
+    fill = ptr[:-1].copy()
+    items = np.empty(ptr[cells], np.int64)
+    for k in range(len(lo)):
+        i0, j0, k0, i1, j1, k1 = cell_span(lo[k], hi[k], 0.0, origin, cell, dims)
+        for c in range(k0, k1 + 1):
+            for b in range(j0, j1 + 1):
+                for a in range(i0, i1 + 1):
+                    key = a + dims[0] * (b + dims[1] * c)
+                    items[fill[key]] = k
+                    fill[key] += 1
     return ptr, items
 
 
 @njit(cache=True, inline="always")
-def _gap2(q_lo, q_hi, i_lo, i_hi):
+def gap2(q_lo, q_hi, i_lo, i_hi):
     """Squared distance between two boxes."""
     d2 = 0.0
     for a in range(3):
@@ -132,7 +135,7 @@ def _gap2(q_lo, q_hi, i_lo, i_hi):
 
 
 @njit(cache=True, inline="always")
-def _owns(q_lo, i_lo, r, a, b, c, origin, cell, dims):
+def owns(q_lo, i_lo, r, a, b, c, origin, cell, dims):
     """Whether cell (a, b, c) holds the lower corner of the overlap of the grown query box and the item's box."""
     return (a == cell_of(max(q_lo[0] - r, i_lo[0]), origin, cell, dims, 0)
             and b == cell_of(max(q_lo[1] - r, i_lo[1]), origin, cell, dims, 1)
@@ -168,9 +171,9 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
                 for m in range(ptr[key], ptr[key + 1]):
                     t = items[m]
                     f = faces[tris[t]]
-                    if _shares(p, f) or _gap2(v_lo[q], v_hi[q], t_lo[t], t_hi[t]) > r2:
+                    if _shares(p, f) or gap2(v_lo[q], v_hi[q], t_lo[t], t_hi[t]) > r2:
                         continue
-                    if not _owns(v_lo[q], t_lo[t], r, a, b, c, origin, cell, dims):
+                    if not owns(v_lo[q], t_lo[t], r, a, b, c, origin, cell, dims):
                         continue
                     if exact:
                         u, v, w = closest_barycentric(x[p], x[f[0]], x[f[1]], x[f[2]])
@@ -249,9 +252,9 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                     b0, b1 = edges[ids[s], 0], edges[ids[s], 1]
                     if a0 == b0 or a0 == b1 or a1 == b0 or a1 == b1:
                         continue
-                    if _gap2(e_lo[q], e_hi[q], e_lo[s], e_hi[s]) > r2:
+                    if gap2(e_lo[q], e_hi[q], e_lo[s], e_hi[s]) > r2:
                         continue
-                    if not _owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
+                    if not owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
                         continue
                     if fill:
                         out[start + found, 0] = a0
