@@ -104,7 +104,7 @@ class BodyCollider:
     def _query(self, points, frame, ids, radius=None):
         """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of ``points``."""
         radius = self.margin if radius is None else radius
-        point, tri = clustered_query(points, radius, self._body(frame), cell=BOX_CELL)
+        point, tri = clustered_query(points, radius, self._body(frame))
         self.queries += 1
         self.queried_points += len(points)
         keys = np.asarray(ids, np.int64)[point] * len(self.faces) + tri

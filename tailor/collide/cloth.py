@@ -374,10 +374,13 @@ class SelfCollider:
             return vertex, tri, near
         corners = self.faces[tri]
         keep = ~self._ignored[vertex] & ~self._ignored[corners].any(axis=1)
-        keep |= self._is_kept(vertex[:, None], corners).any(axis=1)
+        touched = np.flatnonzero(~keep)  # only these can be saved by a kept pair
+        keep[touched] = self._is_kept(vertex[touched, None], corners[touched]).any(axis=1)
         if len(self._ee):
-            a, b = self._ee[:, :2], self._ee[:, 2:]
-            ee = ~self._ignored[self._ee].any(axis=1) | self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), -1).any(axis=1)
+            ee = ~self._ignored[self._ee].any(axis=1)
+            touched = np.flatnonzero(~ee)
+            a, b = self._ee[touched, :2], self._ee[touched, 2:]
+            ee[touched] = self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), -1).any(axis=1)
             self._ee, self._ee_near = self._ee[ee], self._ee_near[ee]
         return vertex[keep], tri[keep], near[keep]
 
