@@ -191,6 +191,28 @@ def test_ignored_vertices_take_no_part_in_any_contact():
     assert counts[0] > 0 and counts[1] == 0 and counts[2] == 0 and counts[3] == counts[0]
 
 
+def test_ignored_vertices_far_from_every_candidate_change_nothing():
+    """A free zone no candidate pair touches (here a flat panel 2 m away, which ``auto`` leaves out
+    of the query) drops no pair of the rest: the contacts are those found with nothing ignored,
+    kept pairs or not."""
+    model, x0 = stacked(0.002, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    x0[~upper, 2] += 2.0
+    top = upper & (x0[:, 0] > 0.0)  # the upper panel folded over on itself, its top half falling
+    x0[top, 0] *= -1.0
+    x0[top, 2] += 0.005
+    v0 = np.zeros_like(x0)
+    v0[top, 2] = -1.0
+    counts = []
+    lower = np.flatnonzero(~upper)
+    for ignored, keep in ((None, None), (~upper, None), (~upper, np.column_stack([lower[:-1], lower[1:]]))):
+        state = model.state(x0.copy(), v0.copy())
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="auto")
+        collider.ignore(ignored, keep)
+        counts.append(collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01))
+    assert counts[0] > 0 and counts[1] == counts[0] and counts[2] == counts[0]
+
+
 def test_an_open_seams_two_sides_keep_out_of_each_other_but_its_pairs_meet():
     """The neighbourhoods of an open seam's two sides are left free of the rest of the cloth, but
     not of each other: ignored with their pairs kept, a panel falling onto another is caught; the

@@ -380,7 +380,7 @@ class SelfCollider:
             ee = ~self._ignored[self._ee].any(axis=1)
             touched = np.flatnonzero(~ee)
             a, b = self._ee[touched, :2], self._ee[touched, 2:]
-            ee[touched] = self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), -1).any(axis=1)
+            ee[touched] = self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), 4).any(axis=1)
             self._ee, self._ee_near = self._ee[ee], self._ee_near[ee]
         return vertex[keep], tri[keep], near[keep]
 
