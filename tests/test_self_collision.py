@@ -320,3 +320,24 @@ def test_patches_sharing_a_vertex_are_found_as_by_brute_force():
             by_vertex.setdefault(int(v), set()).add(int(p))
     expected = sorted({i * 7 + j for ps in by_vertex.values() for i, j in combinations(sorted(ps), 2)})
     assert _shared_vertex_pairs(faces.ravel(), np.repeat(patch, 3), 7).tolist() == expected
+
+
+def test_a_cloth_part_flung_across_the_garment_in_one_step_stops_with_a_clear_error():
+    """An exploding state (a panel 1 m away from the rest a step later: 100 m/s) stops before the
+    swept query over it, which would run for minutes; a panel falling 1 cm does not."""
+    from tailor.errors import SimulationUnstable
+
+    model, x0 = stacked(0.02, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    inv_mass = 1.0 / np.asarray(model.vertex_mass)
+    for jump, fails in ((0.01, False), (1.0, True)):
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+        collider.respond(inv_mass, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
+        x1 = x0.copy()
+        x1[upper, 2] -= jump
+        state = model.state(x1, np.zeros_like(x0))
+        if fails:
+            with pytest.raises(SimulationUnstable, match="moved .* relative to the rest in one step"):
+                collider.respond(inv_mass, state, 0.01)
+        else:
+            collider.respond(inv_mass, state, 0.01)

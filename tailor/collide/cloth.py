@@ -77,6 +77,11 @@ PATCH_MIN = 0.05
 MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 
+MAX_RELATIVE_SPEED = 20.0
+"""[m/s] No part of a garment moves this fast relative to the rest of it (sewing and walking drapes
+stay under 5 m/s); a step beyond it is an exploding state, whose swept boxes would make the next
+query take minutes: it stops with :class:`SimulationUnstable` instead."""
+
 
 def _shared_vertex_pairs(vertex, patch, count: int):
     """Sorted distinct keys ``i · count + j`` (i < j) of the patches that share a vertex, from each
@@ -407,7 +412,13 @@ class SelfCollider:
         if xp is not None:
             moved = max(moved, self._moved(xp, self._anchor))
         if moved >= 0.5 * self.margin:
-            self._query(x, xp, self._moved(x, xp))
+            step = self._moved(x, xp)
+            if xp is not None and step > MAX_RELATIVE_SPEED * dt:
+                raise SimulationUnstable(
+                    f"simulation unstable at t = {state.t:.4f} s (Δt = {dt:.3g} s): part of the cloth moved {step:.3g} m "
+                    f"relative to the rest in one step ({step / dt:.3g} m/s, limit {MAX_RELATIVE_SPEED:g}); try a smaller "
+                    f"time step (e.g. {dt / 4:.3g} s), a coarser resolution or a less stiff fabric")
+            self._query(x, xp, step)
         xp = x if xp is None else xp
         total = 0
         if len(self._tri):
