@@ -18,7 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, Layers, SelfCollider, untangle
+from .collide import SELF_COLLISION_MODES, SELF_MARGIN, BodyCollider, Contacts, Layers, SelfCollider, untangle
 from .collide.untangle import vertex_rings
 from .errors import SimulationError
 
@@ -59,12 +59,15 @@ class ContactSettings:
         Whether contact between an outfit's garments keeps their order whatever side they are on
         (:class:`~tailor.collide.Layers`); off while sewing, where open seams pass through the
         garments waiting outside and their neighbours follow.
+    self_margin : float or None
+        Query margin of the self-collision in this phase [m] (None: the pipeline's ``self_margin``).
     """
 
     friction_scale: float = 1.0
     hold: bool = True
     self_collision: bool = True
     layers: bool = True
+    self_margin: float | None = None
 
 
 class BodyMotion(Protocol):
@@ -229,7 +232,7 @@ class ContactPipeline:
     """
 
     def __init__(self, body: BodyCollider | None, motion: BodyMotion | None, *, thickness: float, friction,
-                 self_collision: str = "off", self_margin: float = 0.01, panel_layer=None):
+                 self_collision: str = "off", self_margin: float = SELF_MARGIN, panel_layer=None):
         self.body, self.motion, self.thickness = body, motion, float(thickness)
         self.friction = friction
         self.self_mode = check_self_collision(self_collision)
@@ -294,6 +297,7 @@ class ContactPipeline:
         self.loads.add(model, dt, support, response)
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x, bx)
+            collider.use_margin(self.settings.self_margin or self.self_margin)
             collider.ignore(*self._open_seams(model))
             # pinned (attached, or an outfit's garment waiting to sew) vertices do not move: read each
             # step, since pins change without the vertex count changing

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import trimesh
 
-from .collide import BodyCollider
+from .collide import SELF_MARGIN, BodyCollider
 from .contact import ContactPipeline, StaticBody, body_margin, check_self_collision
 from .curves import Curve
 from .fabric import Fabric, preset
@@ -96,7 +96,7 @@ class SceneResult:
 
 def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0, integrator: str = "implicit",
               dt: float | None = None, thickness: float = 0.003, friction: float = 0.4, self_collision: str = "auto",
-              margin: float = 0.01, v0=None, guard: Guard | None = None, on_frame=None, hooks=(),
+              margin: float = SELF_MARGIN, v0=None, guard: Guard | None = None, on_frame=None, hooks=(),
               forces=None, wind=None) -> SceneResult:
     """Simulate cloth ``model`` from positions ``x0`` over a static ``body`` = (vertices, faces).
 

@@ -51,17 +51,16 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SimulationUnstable
-from ..geometry import vertex_normals
 from .cloth_kernels import PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts, unique_ints
 from .grid import edge_edge_pairs, overlapping_boxes, vertex_rings, vertex_triangle_pairs
+from .layers import Layers
 
-__all__ = ["SelfCollider", "SELF_COLLISION_MODES", "Layers"]
+__all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
 FOLDED_COS = 0.5
@@ -76,6 +75,14 @@ PATCH_MIN = 0.05
 """See ``PATCH_EDGES`` [m]: smaller patches cost more box pairs than they save."""
 MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
+
+SELF_MARGIN = 0.005
+"""[m] Default query margin: candidates are the pairs within the thickness plus this anywhere on the
+step's motion, kept while no vertex moves half of it. A narrow margin asks again nearly every step
+on a walking garment, but each query and response handles far fewer pairs (they grow with the
+square of the radius). Every pair that comes within the thickness is found at any margin; the
+margin also sets how deep a pair that crossed is still recognised as one (docs/measurements.md,
+ninth day)."""
 
 MAX_RELATIVE_SPEED = 20.0
 """[m/s] No part of a garment moves this fast relative to the rest of it (sewing and walking drapes
@@ -96,71 +103,6 @@ def _shared_vertex_pairs(vertex, patch, count: int):
             break
         keys.append(p[same] * count + p[same + d])  # sorted by patch within a vertex: p[i] < p[i + d]
     return np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
-
-
-@dataclass(frozen=True)
-class Layers:
-    """An outfit's garments as layers of one cloth (:mod:`tailor.outfit`).
-
-    Attributes
-    ----------
-    face_layer : (F,) int
-        Each face's garment, innermost 0.
-    face_out : (F,) int
-        +1 where a face's winding normal (b − a) × (c − a) points away from the body, −1 where it
-        points at it.
-
-    A contact between two garments keeps the outer one on the outer side, whatever side memory
-    says (3ds Max cloth's layer rule as a one-sided constraint): a vertex of the outer garment on
-    the side of an inner face its ``face_out`` names, a vertex of the inner one behind an outer face.
-    """
-
-    face_layer: np.ndarray
-    face_out: np.ndarray
-
-    @classmethod
-    def round_body(cls, face_layer, face_panel, x, faces, body_x, body_faces) -> "Layers":
-        """The layers of cloth at ``x`` round a body at ``body_x``. A panel's faces share its winding,
-        so one side of a panel faces out: the side most of its area turns to the body's normal at
-        the body vertex nearest each face (a hand beside a skirt, a fold, turns a few faces away)."""
-        from scipy.spatial import cKDTree
-
-        body_x = np.asarray(body_x, float)
-        body_normal = vertex_normals(body_x, body_faces)
-        body_normal /= np.maximum(np.linalg.norm(body_normal, axis=1, keepdims=True), 1e-300)
-        tri = np.asarray(x, float)[faces]
-        normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])  # length: twice the area
-        nearest = cKDTree(body_x).query(tri.mean(axis=1))[1]
-        vote = np.bincount(face_panel, weights=np.einsum("ij,ij->i", normal, body_normal[nearest]))
-        out = np.where(vote[face_panel] >= 0.0, 1, -1).astype(np.int8)
-        return cls(np.asarray(face_layer, np.int64), out)
-
-    def vertex_layer(self, faces, n: int) -> np.ndarray:
-        """(N,) each vertex's garment (garments share no vertex)."""
-        out = np.zeros(n, np.int64)
-        out[faces] = np.asarray(self.face_layer)[:, None]
-        return out
-
-    def vertex_triangle_sides(self, vertex_layer, vtx, tri) -> np.ndarray:
-        """(V,) int8 per vertex–triangle pair: the side of the triangle's winding normal the vertex
-        belongs on (±1), 0 within one garment."""
-        lv, lt = vertex_layer[vtx], np.asarray(self.face_layer)[tri]
-        out = np.asarray(self.face_out, np.int8)[tri]
-        return np.where(lv > lt, out, np.where(lv < lt, -out, 0)).astype(np.int8)
-
-    def edge_directions(self, vertex_layer, faces, x, pairs) -> np.ndarray:
-        """(E, 3) per edge pair (a0, a1, b0, b1): the direction edge a belongs in from edge b (the
-        inner edge's outward normal, signed), zero within one garment."""
-        out = np.zeros((len(pairs), 3))
-        la, lb = vertex_layer[pairs[:, 0]], vertex_layer[pairs[:, 2]]
-        between = np.flatnonzero(la != lb)  # most candidates lie within one garment: no normals for them
-        if not len(between):
-            return out
-        normal = vertex_normals(x, faces, self.face_out)  # pointing out, away from the body
-        p = pairs[between]
-        a_outside = (la[between] > lb[between])[:, None]
-        out[between] = np.where(a_outside, normal[p[:, 2]] + normal[p[:, 3]], -(normal[p[:, 0]] + normal[p[:, 1]]))
-        return out
 
 
 def in_sorted(keys, q):
@@ -198,7 +140,7 @@ class SelfCollider:
         An outfit's garments: contacts between them keep their order (:class:`Layers`).
     """
 
-    def __init__(self, faces, face_group, x, *, thickness: float, margin: float = 0.01, mode: str = "auto",
+    def __init__(self, faces, face_group, x, *, thickness: float, margin: float = SELF_MARGIN, mode: str = "auto",
                  patch: float | None = None, friction: float = 0.4, edges: bool = True, layers: Layers | None = None):
         if mode not in ("auto", "on"):
             raise ValueError(f"self-collision mode must be 'auto' or 'on', got {mode!r}")
@@ -366,6 +308,12 @@ class SelfCollider:
         if not same:
             self._ignored, self._kept = mask, keys
             self._anchor = None  # query again
+
+    def use_margin(self, margin: float) -> None:
+        """Query with ``margin`` [m] from now on (asked again at the next step if it changed)."""
+        if margin != self.margin:
+            self.margin = float(margin)
+            self._anchor = None
 
     def _is_kept(self, a, b):
         """Whether each vertex pair (a, b) keeps contact though ignored (:meth:`ignore`)."""
