@@ -59,15 +59,12 @@ class ContactSettings:
         Whether contact between an outfit's garments keeps their order whatever side they are on
         (:class:`~tailor.collide.Layers`); off while sewing, where open seams pass through the
         garments waiting outside and their neighbours follow.
-    self_margin : float or None
-        Query margin of the self-collision in this phase [m] (None: the pipeline's ``self_margin``).
     """
 
     friction_scale: float = 1.0
     hold: bool = True
     self_collision: bool = True
     layers: bool = True
-    self_margin: float | None = None
 
 
 class BodyMotion(Protocol):
@@ -297,7 +294,6 @@ class ContactPipeline:
         self.loads.add(model, dt, support, response)
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x, bx)
-            collider.use_margin(self.settings.self_margin or self.self_margin)
             collider.ignore(*self._open_seams(model))
             # pinned (attached, or an outfit's garment waiting to sew) vertices do not move: read each
             # step, since pins change without the vertex count changing

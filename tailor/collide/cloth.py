@@ -76,13 +76,12 @@ PATCH_MIN = 0.05
 MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 
-SELF_MARGIN = 0.005
+SELF_MARGIN = 0.01
 """[m] Default query margin: candidates are the pairs within the thickness plus this anywhere on the
-step's motion, kept while no vertex moves half of it. A narrow margin asks again nearly every step
-on a walking garment, but each query and response handles far fewer pairs (they grow with the
-square of the radius). Every pair that comes within the thickness is found at any margin; the
-margin also sets how deep a pair that crossed is still recognised as one (docs/measurements.md,
-ninth day)."""
+step's motion, kept while no vertex moves half of it. Every pair that comes within the thickness
+is found at any margin, but the margin also sets how deep a pair that crossed is still recognised
+as one: narrower margins, though cheaper on a walking garment, let some drapes cross or tear
+(docs/measurements.md, ninth day)."""
 
 MAX_RELATIVE_SPEED = 20.0
 """[m/s] No part of a garment moves this fast relative to the rest of it (sewing and walking drapes
@@ -308,12 +307,6 @@ class SelfCollider:
         if not same:
             self._ignored, self._kept = mask, keys
             self._anchor = None  # query again
-
-    def use_margin(self, margin: float) -> None:
-        """Query with ``margin`` [m] from now on (asked again at the next step if it changed)."""
-        if margin != self.margin:
-            self.margin = float(margin)
-            self._anchor = None
 
     def _is_kept(self, a, b):
         """Whether each vertex pair (a, b) keeps contact though ignored (:meth:`ignore`)."""
