@@ -175,3 +175,81 @@ def test_friction_moves_a_vertex_only_for_the_part_of_the_step_after_it_landed()
         assert np.allclose(state.x[:, 2], thickness)
         travel = state.x[:, 0] - start[:, 0]
         assert np.allclose(travel, (dt - after) * 0.5 + after * slowed)
+
+
+def test_kept_body_candidates_hold_every_triangle_within_half_the_margin_as_the_body_walks():
+    """Candidates kept across body frames (the cloth and the trunk move together, an arm swings by)
+    still hold every triangle within half the margin, and the walk asks about far fewer points."""
+    from tailor import read_body
+
+    walk = read_body("mannequin-walk")
+    frames, faces = walk.frames, walk.faces
+    rng = np.random.default_rng(7)
+    ids = rng.choice(frames.shape[1], 1500, replace=False)
+    normals = np.stack([trimesh.Trimesh(f, faces, process=False).vertex_normals[ids] for f in frames])
+    offset = rng.uniform(0.003, 0.02, (len(ids), 1))
+    still = frames[0][ids] + 0.015 * normals[0]  # cloth left behind where the body was: the body moves past it
+    kept = BodyCollider(frames, faces, margin=0.03)
+    exact = BodyCollider(frames, faces, margin=0.015)
+    for step in range(3 * (len(frames) - 1) + 1):
+        s = step / 3.0
+        i, a = int(s), s - int(s)
+        j = min(i + 1, len(frames) - 1)
+        moving = (1 - a) * (frames[i][ids] + offset * normals[i]) + a * (frames[j][ids] + offset * normals[j])
+        x = np.concatenate([moving, still])
+        frame = int(round(s))
+        ptr, tri = kept.candidates(x, frame)
+        eptr, etri = exact.candidates(x, frame, cache=False)
+        have = set(zip(np.repeat(np.arange(len(x)), np.diff(ptr)).tolist(), tri.tolist()))
+        need = set(zip(np.repeat(np.arange(len(x)), np.diff(eptr)).tolist(), etri.tolist()))
+        assert need <= have, f"step {step}: {len(need - have)} pairs within half the margin missing"
+    # asking again on every new frame would ask about every point 24 times (and more between frames)
+    assert kept.queried_points < 0.75 * len(x) * (len(frames) - 1)
+
+
+def test_cubes_remembered_between_queries_give_the_pairs_of_a_fresh_query_and_ask_fcl_only_about_new_cubes():
+    from tailor.collide import TriangleBoxes, clustered_query
+    from tailor.collide.broad import NearCubes
+
+    body = trimesh.creation.capsule(height=0.3, radius=0.08).subdivide()
+    rng = np.random.default_rng(11)
+    pts, _ = trimesh.sample.sample_surface(body, 400, seed=11)
+    pts = np.concatenate([pts + rng.normal(0.0, 0.015, pts.shape), rng.uniform(-1, 1, (20, 3))])
+    target = TriangleBoxes(body.vertices, body.faces, 0.06)
+    near = NearCubes(target, 0.02)
+
+    def same(points):
+        a, b = clustered_query(points, 0.02, target), near.query(points)
+        return set(zip(*a[0:2])) == set(zip(*b[0:2])) and len(a[0]) == len(b[0])
+
+    assert same(pts) and near.fcl_calls == 1
+    for k in range(5):  # subsets inside the cubes already asked about: no FCL call
+        assert same(pts[rng.choice(len(pts), 50, replace=False)])
+    assert near.fcl_calls == 1
+    assert same(pts + [0.3, 0.0, 0.0]) and near.fcl_calls == 2  # the cloth moved on: new cubes asked about
+    assert same(np.concatenate([pts, pts + [0.3, 0.0, 0.0]])) and near.fcl_calls == 2
+
+
+def test_body_drift_bounds_how_much_closer_every_triangle_within_reach_came():
+    from tailor import read_body
+    from tailor.collide.drift import BodyDrift
+
+    walk = read_body("mannequin-walk")
+    a, b, faces = walk.frames[3], walk.frames[5], walk.faces
+    rng = np.random.default_rng(2)
+    points = b[rng.choice(len(b), 400, replace=False)] + rng.normal(0.0, 0.02, (400, 3))
+    moved = (b - a).mean(axis=0) + rng.normal(0.0, 0.01, (400, 3))
+    reach = 0.03
+    bound = BodyDrift(a, b, faces, reach).relative(points, moved)
+    centroids = b[faces].mean(axis=1)
+    reached = []
+    for p in range(len(points)):
+        near = np.flatnonzero(np.linalg.norm(centroids - points[p], axis=1) < reach + 0.05)
+        closest = trimesh.triangles.closest_point(b[faces[near]], np.repeat(points[p][None], len(near), axis=0))
+        tri = near[np.linalg.norm(closest - points[p], axis=1) < reach]
+        if len(tri):
+            worst = np.linalg.norm(moved[p] - (b - a)[faces[tri]].reshape(-1, 3), axis=1).max()
+            assert bound[p] >= worst - 1e-12
+            reached.append(p)
+    assert len(reached) > 100
+    assert np.median(bound[reached]) < 0.5 * np.abs(b - a).max()  # local, not the body's fastest point

@@ -5,12 +5,50 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SimulationUnstable
-from .broad import BOX_CELL, TriangleBoxes, clustered_query
+from .broad import BOX_CELL, NearCubes, TriangleBoxes, clustered_query
 from .closest import nearest_into
 from .contacts import NO_CONTACTS, Contacts
+from .drift import BodyDrift
 from .inside import points_inside
 
 __all__ = ["BodyCollider", "body_gap", "GAP_REACH"]
+
+
+class _Kept:
+    """The body collider's cached candidates: per vertex the triangles found within the margin, where
+    the vertex was when its budget was last counted (``ref``) and how much of half the margin it has
+    left there (``slack`` [m]), and the body frame they were counted on."""
+
+    def __init__(self, frame, ref, slack, keys, csr):
+        self.frame, self.ref, self.slack, self.keys, self.csr = frame, ref, slack, keys, csr
+
+    def spend(self, drift, x, frame) -> None:
+        """The body frame changed to ``frame`` with the vertices at ``x``: ``drift`` (per vertex) is spent."""
+        self.slack = self.slack - drift
+        self.ref = x.copy()
+        self.frame = frame
+
+    def renew(self, ids, x, keys, csr, slack) -> None:
+        """Vertices ``ids`` were asked about again at ``x``: their whole budget ``slack`` back; the new CSR."""
+        self.ref[ids] = x[ids]
+        self.slack[ids] = slack
+        self.keys, self.csr = keys, csr
+
+
+class _Seen:
+    """The cloth at the last response: positions ``x``, lower bounds of their distances from the body
+    (``bound`` [m]) and the body's positions then; the body's drift since, for the last body asked about."""
+
+    def __init__(self, x, bound, body):
+        self.x, self.bound, self.body = x, bound, body
+        self._drift = None  # (body positions, BodyDrift to them)
+
+    def drift(self, body_x, faces, reach: float) -> BodyDrift:
+        """The body's :class:`BodyDrift` from then to ``body_x`` (the same positions asked again: the same one)."""
+        d = self._drift
+        if d is None or not (d[0] is body_x or np.array_equal(d[0], body_x)):
+            d = self._drift = (body_x.copy(), BodyDrift(self.body, body_x, faces, reach))
+        return d[1]
 
 
 class BodyCollider:
@@ -34,10 +72,11 @@ class BodyCollider:
         self.frames = np.asarray(frames, float)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.margin = float(margin)
-        self._boxes = {}  # body frame → its TriangleBoxes
-        self._cache = None  # (frame, each vertex's position when last asked, sorted keys vertex·F + triangle, their CSR)
+        self._boxes = {}  # body frame → its broad phase
+        self._cache: _Kept | None = None  # each vertex's candidates and what is left of its margin
+        self._drifts = {}  # (frame, frame) → the body's BodyDrift between them
         self._previous = None  # signed distance of every vertex after the last response
-        self._seen = None  # (positions, lower bounds of their distances, body) at the last response
+        self._seen: _Seen | None = None  # where the cloth and the body were at the last response
         self.deepest = 0.0  # deepest penetration any response found [m]
         self.queries = 0
         self.queried_points = 0
@@ -48,43 +87,54 @@ class BodyCollider:
         self._previous = None
         self._seen = None
 
-    def _body(self, frame):
+    def _body(self, frame) -> NearCubes:
+        """The body at ``frame`` as the margin's FCL broad phase (the last two frames kept)."""
         if frame not in self._boxes:
             if len(self._boxes) >= 2:  # a walk moves on frame by frame: keep the last two, not all
                 self._boxes.pop(next(iter(self._boxes)))
-            self._boxes[frame] = TriangleBoxes(self.frames[frame], self.faces, BOX_CELL)
+            self._boxes[frame] = NearCubes(TriangleBoxes(self.frames[frame], self.faces, BOX_CELL), self.margin)
         return self._boxes[frame]
 
     def candidates(self, x, frame: int, *, cache: bool = True):
         """CSR (ptr, tri) of body triangles within ``margin`` of each vertex (FCL broad phase).
 
-        With ``cache`` each vertex keeps its answer, on the same body frame, until it has moved
-        more than half the margin from where it was asked about; only the vertices that did are
-        asked again (sewing moves a few fast, settling and walking move most slowly).
+        With ``cache`` each vertex keeps its answer while it is certain to hold every triangle
+        within half the margin: a vertex asked about has half the margin to spend, and spends what
+        it moves and, when the body frame changes, how much closer the body near it came relative
+        to it (:class:`~tailor.collide.drift.BodyDrift`; the trunk under a shirt moves with the
+        shirt, a swinging arm does not). Only the vertices that spent it are asked again (sewing
+        moves a few fast, settling and walking move most slowly).
         """
         if not np.all(np.isfinite(x)):  # FCL would crash on NaN; the guard reports instabilities
             raise SimulationUnstable("cloth positions became NaN or infinite before the body collision query; "
                                      "try a smaller time step or the implicit integrator")
         c = self._cache
-        if cache and c is not None and c[0] == frame and c[1].shape == x.shape:
-            _, anchor, keys, csr = c
-            step = x - anchor  # Euclidean: a vertex within margin/2 of where it was asked keeps every triangle within margin/2
-            moved = np.flatnonzero(np.einsum("ij,ij->i", step, step) >= (0.5 * self.margin) ** 2)
-            if len(moved):
-                anchor = anchor.copy()
-                anchor[moved] = x[moved]
-                mask = np.zeros(len(x), bool)
-                mask[moved] = True
-                keys = np.concatenate([keys[~mask[keys // len(self.faces)]], self._query(x[moved], frame, moved)])
-                keys.sort(kind="stable")  # by vertex; two sorted runs: a stable (merge) sort is far quicker
-                csr = self._csr(keys, len(x))
-                self._cache = (frame, anchor, keys, csr)
+        if not cache or c is None or c.ref.shape != x.shape:
+            keys = self._query(x, frame, np.arange(len(x)))
+            csr = self._csr(keys, len(x))
+            if cache:
+                self._cache = _Kept(frame, x.copy(), np.full(len(x), 0.5 * self.margin), keys, csr)
             return csr
-        keys = self._query(x, frame, np.arange(len(x)))
-        csr = self._csr(keys, len(x))
-        if cache:
-            self._cache = (frame, x.copy(), keys, csr)
-        return csr
+        if c.frame != frame:
+            c.spend(self._drift(c.frame, frame).relative(x, x - c.ref), x, frame)
+        step = x - c.ref
+        moved = np.flatnonzero(np.einsum("ij,ij->i", step, step) >= np.maximum(c.slack, 0.0) ** 2)
+        if len(moved):
+            mask = np.zeros(len(x), bool)
+            mask[moved] = True
+            keys = np.concatenate([c.keys[~mask[c.keys // len(self.faces)]], self._query(x[moved], frame, moved)])
+            keys.sort(kind="stable")  # by vertex; two sorted runs: a stable (merge) sort is far quicker
+            c.renew(moved, x, keys, self._csr(keys, len(x)), 0.5 * self.margin)
+        return c.csr
+
+    def _drift(self, a: int, b: int):
+        """The body's :class:`BodyDrift` from frame ``a`` to ``b`` within the margin (the last few kept)."""
+        key = (a, b)
+        if key not in self._drifts:
+            if len(self._drifts) >= 4:
+                self._drifts.pop(next(iter(self._drifts)))
+            self._drifts[key] = BodyDrift(self.frames[a], self.frames[b], self.faces, self.margin)
+        return self._drifts[key]
 
     def _csr(self, keys, n):
         """(ptr, tri) of sorted keys ``vertex · F + triangle`` over ``n`` vertices."""
@@ -103,8 +153,8 @@ class BodyCollider:
 
     def _query(self, points, frame, ids, radius=None):
         """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of ``points``."""
-        radius = self.margin if radius is None else radius
-        point, tri = clustered_query(points, radius, self._body(frame))
+        near = self._body(frame)
+        point, tri = near.query(points) if radius is None else clustered_query(points, radius, near.target)
         self.queries += 1
         self.queried_points += len(points)
         keys = np.asarray(ids, np.int64)[point] * len(self.faces) + tri
@@ -204,14 +254,12 @@ class BodyCollider:
 
     def _out_of_reach(self, x, body_x, thickness) -> np.ndarray:
         """Vertices at ``x`` that cannot be within ``thickness`` of the body at ``body_x``: their distance
-        at the last response, less how far they and the body have moved since, still exceeds it."""
+        at the last response, less how much closer the body near them has come since (their motion
+        relative to it, :class:`~tailor.collide.drift.BodyDrift`), still exceeds it."""
         seen = self._seen
-        if seen is None or len(seen[0]) != len(x):
+        if seen is None or len(seen.x) != len(x):
             return np.zeros(len(x), bool)
-        x_at, bound, body_at = seen
-        shift = 0.0 if body_x is body_at else float(np.sqrt(np.einsum("ij,ij->i", body_x - body_at, body_x - body_at).max()))
-        moved = np.sqrt(np.einsum("ij,ij->i", x - x_at, x - x_at))
-        return bound - moved - shift > thickness
+        return seen.bound - seen.drift(body_x, self.faces, thickness).relative(x, x - seen.x) > thickness
 
     def _hits(self, x, body_x, frame, thickness):
         """The vertices to respond to: (hit ids, dist, tri, bary, normal) of all vertices.
@@ -224,7 +272,7 @@ class BodyCollider:
         dist, tri, bary, normal = self.nearest(x, body_x, frame)
         # the cached candidates hold every triangle within margin/2: a distance found is exact up to
         # there, and none found (or a farther one) means at least margin/2
-        self._seen = (x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), 0.5 * self.margin), body_x)
+        self._seen = _Seen(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), 0.5 * self.margin), body_x)
         prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
         crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
         plausible = (dist > -0.5 * self.margin) | crossed

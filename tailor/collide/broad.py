@@ -14,7 +14,7 @@ from numba import njit, prange
 
 from .closest import closest_barycentric
 
-__all__ = ['bvh_object', 'boxes', 'manager_contacts', 'sphere_query', 'clustered_query', 'corner_bounds', 'run_starts', 'TriangleBoxes', 'BOX_CELL', 'POINT_CELL']
+__all__ = ['bvh_object', 'boxes', 'manager_contacts', 'sphere_query', 'clustered_query', 'corner_bounds', 'run_starts', 'TriangleBoxes', 'NearCubes', 'BOX_CELL', 'POINT_CELL']
 
 
 def bvh_object(vertices, faces):
@@ -190,6 +190,77 @@ def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = POIN
     exact = point_boxes is None and not target.swept
     return _expand_boxes(pairs, p_ptr, p_order.astype(np.int64), target.ptr, target.order, np.ascontiguousarray(lo),
                          np.ascontiguousarray(hi), target.lo, target.hi, target.corners, float(radius), exact)
+
+
+class NearCubes:
+    """:func:`clustered_query` against one ``target`` at one ``radius``, remembering per cube of
+    space the target's boxes near it.
+
+    The points are binned into cubes of side ``cell`` on a fixed lattice; FCL collides each cube
+    not seen before, whole and grown by ``radius``, with the target's boxes, and the cube keeps the
+    boxes it met. A later query whose points lie in known cubes asks FCL nothing: its pairs come
+    from the compiled pass alone. A body collider asks a frame's body about the whole cloth once
+    and then, step by step, about the few vertices that moved (each FCL call has a fixed cost and
+    python-fcl a Python object per pair: docs/measurements.md).
+    """
+
+    LATTICE = 1 << 20
+    """Cubes per axis either side of the origin a key can name (at 9 cm: 94 km)."""
+
+    def __init__(self, target: TriangleBoxes, radius: float, cell: float = POINT_CELL):
+        self.target, self.radius, self.cell = target, float(radius), float(cell)
+        self._known = np.zeros(0, np.int64)  # sorted keys of the cubes asked about
+        self._ptr = np.zeros(1, np.int64)  # their target boxes, CSR in the order of ``_known``
+        self._boxes = np.zeros(0, np.int64)
+        self.fcl_calls = 0
+
+    def query(self, points):
+        """(point, triangle) index pairs of the target's triangles within the radius of each point."""
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        if not len(points) or not len(self.target):
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        cube = np.floor(points / self.cell)
+        if np.abs(cube).max() >= self.LATTICE:  # too far out for a key: no lattice
+            return clustered_query(points, self.radius, self.target, cell=self.cell)
+        cube = cube.astype(np.int64) + self.LATTICE
+        key = (cube[:, 0] << 42) | (cube[:, 1] << 21) | cube[:, 2]
+        order = np.argsort(key, kind="stable").astype(np.int64)
+        starts = run_starts(key[order])
+        cubes = key[order[starts]]
+        self._learn(cubes)
+        at = np.searchsorted(self._known, cubes)
+        count = self._ptr[at + 1] - self._ptr[at]
+        pairs = np.empty((int(count.sum()), 2), np.int64)
+        pairs[:, 0] = np.repeat(np.arange(len(cubes)), count)
+        first = np.repeat(self._ptr[at] - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
+        pairs[:, 1] = self._boxes[first + np.arange(len(pairs))]
+        t = self.target
+        return _expand_boxes(pairs, np.append(starts, len(key)).astype(np.int64), order, t.ptr, t.order, points, points,
+                             t.lo, t.hi, t.corners, self.radius, True)
+
+    def _learn(self, cubes) -> None:
+        """Ask FCL about the ``cubes`` (sorted keys) not yet known."""
+        new = cubes[~np.isin(cubes, self._known)]
+        if not len(new):
+            return
+        self.fcl_calls += 1
+        ijk = np.stack([(new >> 42) & (2 * self.LATTICE - 1), (new >> 21) & (2 * self.LATTICE - 1),
+                        new & (2 * self.LATTICE - 1)], axis=1) - self.LATTICE
+        lo = ijk * self.cell - self.radius
+        contacts, mine = manager_contacts(*boxes(lo, lo + self.cell + 2 * self.radius), self.target.manager,
+                                          limit=64 * len(new) + 1000)
+        theirs = self.target.index
+        cube, box = np.empty(len(contacts), np.int64), np.empty(len(contacts), np.int64)
+        for k, c in enumerate(contacts):
+            a = mine.get(id(c.o1))
+            cube[k], box[k] = (a, theirs[id(c.o2)]) if a is not None else (mine[id(c.o2)], theirs[id(c.o1)])
+        keys = np.concatenate([np.repeat(self._known, np.diff(self._ptr)), new[cube]])
+        boxes_ = np.concatenate([self._boxes, box])
+        self._known = np.union1d(self._known, new)
+        order = np.argsort(keys, kind="stable")
+        self._boxes = boxes_[order]
+        self._ptr = np.searchsorted(keys[order], np.append(self._known, np.iinfo(np.int64).max)).astype(np.int64)
+        self._ptr[-1] = len(keys)
 
 
 @njit(cache=True, inline="always")
