@@ -253,3 +253,20 @@ def test_body_drift_bounds_how_much_closer_every_triangle_within_reach_came():
             reached.append(p)
     assert len(reached) > 100
     assert np.median(bound[reached]) < 0.5 * np.abs(b - a).max()  # local, not the body's fastest point
+
+
+def test_vertices_that_moved_inside_after_a_response_are_still_rescued():
+    """Rescue skips the vertices the last response found surely outside, by more than they moved since:
+    vertices moved deep inside after it (a merge, an untangling push) are tested and returned."""
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.2)
+    model, x0 = sheet(6, 6, 0.01, "cotton", vertical=False)
+    x = x0 - x0.mean(axis=0) + [0.0, 0.0, 0.205]  # resting 5 mm over the top
+    state = model.state(x, np.zeros_like(x))
+    body = np.asarray(ball.vertices)
+    collider = BodyCollider(body[None], ball.faces, margin=0.03)
+    collider.respond(model, state, 0.01, body, np.zeros_like(body), 0, thickness=0.002, friction=0.3)
+    assert collider._surely_outside(state.x, body).all()  # all 5 mm out: none needs the inside test
+    state.x[:2] -= [0.0, 0.0, 0.1]  # two pushed 10 cm down, deep inside
+    state.x[2] -= [0.0, 0.0, 0.004]  # one 4 mm down: still outside, but no longer surely
+    assert collider.rescue(model, state, body, np.zeros_like(body), 0, thickness=0.002) == 2
+    assert np.all(np.linalg.norm(state.x[:2], axis=1) > 0.2)

@@ -37,18 +37,20 @@ class _Kept:
 
 class _Seen:
     """The cloth at the last response: positions ``x``, lower bounds of their distances from the body
-    (``bound`` [m]) and the body's positions then; the body's drift since, for the last body asked about."""
+    (``bound`` [m]; negative inside), of how far outside it they surely were (``outside`` [m], 0 where
+    the side is not certain), and the body's positions then; the body's drift since, for the last
+    body (and reach) asked about."""
 
-    def __init__(self, x, bound, body):
-        self.x, self.bound, self.body = x, bound, body
-        self._drift = None  # (body positions, BodyDrift to them)
+    def __init__(self, x, bound, body, outside):
+        self.x, self.bound, self.body, self.outside = x, bound, body, outside
+        self._drift = None  # (body positions, reach, BodyDrift to them)
 
     def drift(self, body_x, faces, reach: float) -> BodyDrift:
-        """The body's :class:`BodyDrift` from then to ``body_x`` (the same positions asked again: the same one)."""
+        """The body's :class:`BodyDrift` from then to ``body_x`` within ``reach`` (the same asked again: the same one)."""
         d = self._drift
-        if d is None or not (d[0] is body_x or np.array_equal(d[0], body_x)):
-            d = self._drift = (body_x.copy(), BodyDrift(self.body, body_x, faces, reach))
-        return d[1]
+        if d is None or d[1] != reach or not (d[0] is body_x or np.array_equal(d[0], body_x)):
+            d = self._drift = (body_x.copy(), reach, BodyDrift(self.body, body_x, faces, reach))
+        return d[2]
 
 
 class BodyCollider:
@@ -193,12 +195,13 @@ class BodyCollider:
         :meth:`respond` trusts only contacts within half the margin, or vertices it saw cross,
         so a vertex that arrives deep inside without crossing (a merged seam vertex at the
         centroid of its partners round a shoulder, or one squeezed through a crease) stays
-        there. Here every vertex is tested against the closed surface (:func:`points_inside`);
+        there. Here every vertex not surely outside (:meth:`_surely_outside`) is tested against the
+        closed surface (:func:`points_inside`);
         those inside, and confirmed by the closest triangle within ``reach`` facing away, are
         put ``thickness`` outside it at the body's velocity (inelastic, as Eq. 9–10).
         """
         ids, tri, bary, out = self.push_out(state.x, body_x, frame, clearance=thickness, reach=reach,
-                                            skip=model.vertex_pinned)
+                                            skip=model.vertex_pinned | self._surely_outside(state.x, body_x))
         if not len(ids):
             return 0
         state.x[ids] = out
@@ -212,10 +215,8 @@ class BodyCollider:
         whose closest triangle within ``reach`` faces away from them, put ``clearance`` outside it.
 
         Returns (ids, their closest triangles, barycentrics, the points moved out (K, 3))."""
-        inside = points_inside(points, body_x, self.faces)
-        if skip is not None:
-            inside &= ~skip
-        inside = np.flatnonzero(inside)
+        test = np.arange(len(points)) if skip is None else np.flatnonzero(~np.asarray(skip, bool))
+        inside = test[points_inside(points[test], body_x, self.faces)]
         if not len(inside):
             return inside, inside, np.zeros((0, 3)), np.zeros((0, 3))
         keys = self._query(points[inside], frame, np.arange(len(inside)), radius=reach)
@@ -261,6 +262,15 @@ class BodyCollider:
             return np.zeros(len(x), bool)
         return seen.bound - seen.drift(body_x, self.faces, thickness).relative(x, x - seen.x) > thickness
 
+    def _surely_outside(self, x, body_x) -> np.ndarray:
+        """Vertices at ``x`` that cannot have entered the body at ``body_x``: found outside at the last
+        response, within half the margin (where the side is certain), by more than they have moved
+        relative to the body near them since (to reach its inside they must cross its surface)."""
+        seen = self._seen
+        if seen is None or len(seen.x) != len(x):
+            return np.zeros(len(x), bool)
+        return seen.outside - seen.drift(body_x, self.faces, 0.5 * self.margin).relative(x, x - seen.x) > 0.0
+
     def _hits(self, x, body_x, frame, thickness):
         """The vertices to respond to: (hit ids, dist, tri, bary, normal) of all vertices.
 
@@ -272,7 +282,8 @@ class BodyCollider:
         dist, tri, bary, normal = self.nearest(x, body_x, frame)
         # the cached candidates hold every triangle within margin/2: a distance found is exact up to
         # there, and none found (or a farther one) means at least margin/2
-        self._seen = _Seen(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), 0.5 * self.margin), body_x)
+        self._seen = _Seen(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), 0.5 * self.margin), body_x,
+                           np.where((tri >= 0) & (dist > 0.0) & (dist < 0.5 * self.margin), dist, 0.0))
         prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
         crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
         plausible = (dist > -0.5 * self.margin) | crossed
