@@ -244,6 +244,7 @@ class ContactPipeline:
         self._self: SelfCollider | None = None
         self._self_key = None
         self._rings = None  # (numbering, each vertex's neighbours) for untangling
+        self._waiting = None  # (N,) bool: an outfit's garments waiting outside to sew, out of the self-collision
 
     def configure(self, settings: ContactSettings) -> None:
         """What contact does from now on (a new phase)."""
@@ -252,6 +253,12 @@ class ContactPipeline:
     def constrain(self, *constraints) -> None:
         """Constraints applied before the body each step (``apply(state, body_x, body_v)``): limb walls, attachments."""
         self.constraints = tuple(c for c in constraints if c is not None)
+
+    def wait(self, waiting) -> None:
+        """``waiting`` ((N,) bool over the current numbering, or None): an outfit's garments waiting
+        outside, pinned, while the one inside sews; the self-collision leaves them out (they are
+        placed afresh, clear of it, before they sew)."""
+        self._waiting = None if waiting is None or not np.any(waiting) else np.asarray(waiting, bool)
 
     def follow(self, friction) -> None:
         """The cloth's vertices were welded (their count changed; the colliders notice by it):
@@ -295,6 +302,7 @@ class ContactPipeline:
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x, bx)
             collider.ignore(*self._open_seams(model))
+            collider.leave_out(self._waiting if self._waiting is not None and len(self._waiting) == model.vertex_count else None)
             # pinned (attached, or an outfit's garment waiting to sew) vertices do not move: read each
             # step, since pins change without the vertex count changing
             collider.respond(np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass)), state, dt)

@@ -361,3 +361,22 @@ def test_a_narrower_margin_asks_about_fewer_pairs_and_finds_the_same_contacts():
     assert narrow_pairs < wide_pairs
     assert wide > 0 and narrow == wide
     np.testing.assert_allclose(x_narrow, x_wide, atol=1e-9)
+
+
+def test_a_panel_left_out_is_neither_a_contact_nor_a_candidate_until_it_is_let_back_in():
+    """An outfit's garment waiting outside while the one inside sews is out of the self-collision:
+    a panel falling onto it passes (no contacts, no pairs with it), and is caught once it is back."""
+    model, x0 = stacked(0.006, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper, lower = panel_vertices(model, 1), panel_vertices(model, 0)
+    v0 = np.zeros_like(x0)
+    v0[upper, 2] = -0.5
+    inv_mass = np.where(lower, 0.0, 1.0 / np.asarray(model.vertex_mass))  # the waiting panel is pinned
+    found = []
+    for waiting in (lower, None):
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+        collider.leave_out(waiting)
+        state = model.state(x0.copy(), v0.copy())
+        found.append((collider.respond(inv_mass, state, 0.01), collider.candidate_pairs))
+    (out, out_pairs), (back, back_pairs) = found
+    assert out == 0 and back > 0
+    assert out_pairs < back_pairs  # the upper panel's own pairs only

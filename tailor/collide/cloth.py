@@ -174,6 +174,7 @@ class SelfCollider:
         self._x_prev = None
         self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
         self._kept = None  # sorted vertex-pair keys that keep contact though ignored
+        self._left_out = None  # (N,) bool: vertices out of the simulation for now (an outfit's garment waiting to sew)
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1,
                       "query_s": 0.0, "response_s": 0.0}
 
@@ -252,6 +253,8 @@ class SelfCollider:
         radius = self.thickness + self.margin
         swept = None if xp is None else (np.minimum(x, xp), np.maximum(x, xp))  # each vertex's box over the step
         faces = self.active_faces(x, swept)
+        if self._left_out is not None:
+            faces = faces[~self._left_out[self.faces[faces]].all(axis=1)]
         self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
         self._ee = np.zeros((0, 4), np.int64)
@@ -261,6 +264,8 @@ class SelfCollider:
         self._ee_toward = np.zeros((0, 3))
         if len(faces):
             verts = unique_ints(self.faces[faces].ravel())
+            if self._left_out is not None:
+                verts = verts[~self._left_out[verts]]
             lo, hi = (x, x) if swept is None else swept
             # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
             # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
@@ -306,6 +311,16 @@ class SelfCollider:
             and np.array_equal(keys, self._kept))
         if not same:
             self._ignored, self._kept = mask, keys
+            self._anchor = None  # query again
+
+    def leave_out(self, vertices) -> None:
+        """From now on the ``vertices`` ((N,) bool, or None for none) are out of the self-collision
+        altogether, not even obstacles, and cost the broad phase nothing: an outfit's garments waiting
+        outside while the one inside sews (it is placed afresh over the sewn one before its own stage)."""
+        mask = None if vertices is None or not np.any(vertices) else np.asarray(vertices, bool)
+        if not ((mask is None and self._left_out is None)
+                or (mask is not None and self._left_out is not None and np.array_equal(mask, self._left_out))):
+            self._left_out = mask
             self._anchor = None  # query again
 
     def _is_kept(self, a, b):

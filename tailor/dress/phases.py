@@ -70,6 +70,9 @@ class Dressing:
             ids, heights, under, ceilings = self.held_heights
             held = HeightHold(ids, heights, g.weld, under, ceilings)
         self.contacts.constrain(walls, self.attachments, held)
+        waiting = np.zeros(g.model.vertex_count, bool)
+        waiting[g.weld[g.waiting]] = True
+        self.contacts.wait(waiting)
 
     @property
     def frame_dt(self) -> float:
