@@ -37,20 +37,20 @@ class _Kept:
 
 class _Seen:
     """The cloth at the last response: positions ``x``, lower bounds of their distances from the body
-    (``bound`` [m]; negative inside), of how far outside it they surely were (``outside`` [m], 0 where
-    the side is not certain), and the body's positions then; the body's drift since, for the last
-    body (and reach) asked about."""
+    (``bound`` [m], at most ``reach``; negative inside), of how far outside it they surely were
+    (``outside`` [m], 0 where the side is not certain), and the body's positions then; the body's
+    drift since within ``reach``, for the last body asked about."""
 
-    def __init__(self, x, bound, body, outside):
-        self.x, self.bound, self.body, self.outside = x, bound, body, outside
-        self._drift = None  # (body positions, reach, BodyDrift to them)
+    def __init__(self, x, bound, body, outside, reach: float):
+        self.x, self.bound, self.body, self.outside, self.reach = x, bound, body, outside, reach
+        self._drift = None  # (body positions, BodyDrift to them)
 
-    def drift(self, body_x, faces, reach: float) -> BodyDrift:
-        """The body's :class:`BodyDrift` from then to ``body_x`` within ``reach`` (the same asked again: the same one)."""
+    def drift(self, body_x, faces) -> BodyDrift:
+        """The body's :class:`BodyDrift` from then to ``body_x`` (the same positions asked again: the same one)."""
         d = self._drift
-        if d is None or d[1] != reach or not (d[0] is body_x or np.array_equal(d[0], body_x)):
-            d = self._drift = (body_x.copy(), reach, BodyDrift(self.body, body_x, faces, reach))
-        return d[2]
+        if d is None or not (d[0] is body_x or np.array_equal(d[0], body_x)):
+            d = self._drift = (body_x.copy(), BodyDrift(self.body, body_x, faces, self.reach))
+        return d[1]
 
 
 class BodyCollider:
@@ -260,7 +260,7 @@ class BodyCollider:
         seen = self._seen
         if seen is None or len(seen.x) != len(x):
             return np.zeros(len(x), bool)
-        return seen.bound - seen.drift(body_x, self.faces, thickness).relative(x, x - seen.x) > thickness
+        return seen.bound - seen.drift(body_x, self.faces).relative(x, x - seen.x) > thickness
 
     def _surely_outside(self, x, body_x) -> np.ndarray:
         """Vertices at ``x`` that cannot have entered the body at ``body_x``: found outside at the last
@@ -269,7 +269,7 @@ class BodyCollider:
         seen = self._seen
         if seen is None or len(seen.x) != len(x):
             return np.zeros(len(x), bool)
-        return seen.outside - seen.drift(body_x, self.faces, 0.5 * self.margin).relative(x, x - seen.x) > 0.0
+        return seen.outside - seen.drift(body_x, self.faces).relative(x, x - seen.x) > 0.0
 
     def _hits(self, x, body_x, frame, thickness):
         """The vertices to respond to: (hit ids, dist, tri, bary, normal) of all vertices.
@@ -282,8 +282,9 @@ class BodyCollider:
         dist, tri, bary, normal = self.nearest(x, body_x, frame)
         # the cached candidates hold every triangle within margin/2: a distance found is exact up to
         # there, and none found (or a farther one) means at least margin/2
-        self._seen = _Seen(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), 0.5 * self.margin), body_x,
-                           np.where((tri >= 0) & (dist > 0.0) & (dist < 0.5 * self.margin), dist, 0.0))
+        half = 0.5 * self.margin
+        self._seen = _Seen(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), half), body_x,
+                           np.where((tri >= 0) & (dist > 0.0) & (dist < half), dist, 0.0), half)
         prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
         crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
         plausible = (dist > -0.5 * self.margin) | crossed
