@@ -146,7 +146,7 @@ def test_the_issue_command_symplectic_with_cuts_completes(tmp_path):
     assert len(list(out.glob("*.obj"))) == 3
 
 
-def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
+def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step_by_their_speed_relative_to_it():
     from tailor.dress.timeline import NearBodySpeed as _NearBodySpeed
 
     # two boxes: a still one near the cloth and one 1 m away moving at 2 m/s
@@ -160,7 +160,10 @@ def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step():
     at_rest = np.zeros_like(cloth)
     assert speed(cloth, at_rest, frames[0], 0.04, (0.0, 0.04)) == 0.0  # the moving box is out of reach
     assert speed(cloth + [1.0, 0.0, 0.0], at_rest, frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)
-    assert speed(cloth, np.full_like(cloth, 30.0), frames[0], 0.04, (0.0, 0.04)) == pytest.approx(2.0)  # fast cloth
+    with_it = np.tile([2.0, 0.0, 0.0], (len(cloth), 1))  # cloth carried along with the moving box
+    assert speed(cloth + [1.0, 0.0, 0.0], with_it, frames[0], 0.04, (0.0, 0.04)) == pytest.approx(0.0)
+    # fast cloth reaches both boxes; the still one meets it at its whole speed
+    assert speed(cloth, np.full_like(cloth, 30.0), frames[0], 0.04, (0.0, 0.04)) == pytest.approx(30.0 * np.sqrt(3.0))
 
 
 @pytest.mark.parametrize("garment, resolution, frames", [

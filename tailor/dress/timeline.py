@@ -5,7 +5,8 @@ A moving body with a neutral pose (:attr:`~tailor.body.Body.rest`, as the shippe
 dressed in that pose and then moves into its first frame at :data:`~.options.TRANSITION_SPEED`
 (along key poses :data:`~.options.TRANSITION_KEYS_PER_S` a second), so panels are never placed round a
 leg in mid-stride. Each step while the body moves carries no body point that can reach the cloth
-within the frame more than half the contact margin (the feet do not shorten a T-shirt's steps).
+within the frame more than half the contact margin relative to the cloth nearest it (the feet do not
+shorten a T-shirt's steps, nor the legs those of trousers swinging with them).
 """
 
 from __future__ import annotations
@@ -21,18 +22,23 @@ __all__ = ["Timeline", "NearBodySpeed"]
 
 
 class NearBodySpeed:
-    """The largest speed [m/s] of the body vertices that can reach the cloth within a span.
+    """The largest speed [m/s] of the body vertices that can reach the cloth within a span, relative
+    to the cloth nearest them.
 
-    Per body vertex, its speed over each interval of the motion (looping, as :meth:`Body.at`) and,
-    with a rest ``pose``, over the transition. A body vertex can touch the cloth within ``duration``
-    only if it is nearer than the contact margin plus how far both can travel meanwhile (the cloth
-    at up to twice its fastest vertex's speed plus 1 m/s) plus the longest body edge (a triangle
-    reaches that far from its corners); the others do not limit the step.
+    Per body vertex, its velocity over each interval of the motion (looping, as :meth:`Body.at`) and,
+    with a rest ``pose``, its speed over the transition. A body vertex can touch the cloth within
+    ``duration`` only if it is nearer than the contact margin plus how far both can travel meanwhile
+    (the cloth at up to twice its fastest vertex's speed plus 1 m/s) plus the longest body edge (a
+    triangle reaches that far from its corners); the others do not limit the step. While the body
+    moves, what limits a step is how fast each such body vertex moves relative to the cloth vertex
+    nearest it, at any interval of the span: trousers' legs swing with the legs, and only a hem the
+    knee kicks, or cloth left behind, meets the body at its own speed.
     """
 
     def __init__(self, body, pose, margin: float, transition_s: float = 1.0):
         # transition_s [s]: how long the body takes from ``pose`` into its first frame (unused without a pose)
         f = np.asarray(body.frames, dtype=np.float64)
+        self.frames = f
         self.speeds = np.linalg.norm(np.roll(f, -1, axis=0) - f, axis=2) * body.fps if len(f) > 1 else None
         self.ease = None if pose is None else np.linalg.norm(f[0] - pose, axis=1) / transition_s
         faces = np.asarray(body.faces)
@@ -41,6 +47,7 @@ class NearBodySpeed:
 
     def __call__(self, x, v, body_x, duration: float, span) -> float:
         """``span`` is (start, end) in the motion's time [s], or None during the transition."""
+        intervals = None
         if span is None:
             speed = self.ease
         elif self.speeds is None:
@@ -48,14 +55,24 @@ class NearBodySpeed:
         else:
             k0 = int(math.floor(span[0] * self.fps + 1e-9))
             k1 = max(k0 + 1, int(math.ceil(span[1] * self.fps - 1e-9)))
-            speed = self.speeds[np.arange(k0, k1) % len(self.speeds)].max(axis=0)
+            intervals = np.arange(k0, k1) % len(self.speeds)
+            speed = self.speeds[intervals].max(axis=0)
         if speed is None or not len(x):
             return 0.0
         cloth = float(np.sqrt((v * v).sum(axis=1).max())) if len(v) else 0.0
         reach = self.margin + (float(speed.max()) + 2.0 * cloth + 1.0) * duration + self.edge
-        d, _ = cKDTree(x).query(body_x, distance_upper_bound=reach)
-        near = np.isfinite(d)
-        return float(speed[near].max()) if near.any() else 0.0
+        d, nearest = cKDTree(x).query(body_x, distance_upper_bound=reach)
+        near = np.flatnonzero(np.isfinite(d))
+        if not len(near):
+            return 0.0
+        if intervals is None:
+            return float(speed[near].max())
+        return max(float(np.linalg.norm(self._velocity(k)[near] - v[nearest[near]], axis=1).max()) for k in intervals)
+
+    def _velocity(self, k: int) -> np.ndarray:
+        """(N, 3) body velocity [m/s] over the motion's interval ``k`` (the last one loops to frame 0)."""
+        f = self.frames
+        return (f[(k + 1) % len(f)] - f[k]) * self.fps
 
 
 class Timeline:
@@ -140,7 +157,8 @@ class Timeline:
 
     def moving_step(self, state, duration: float) -> float | None:
         """The step for the next ``duration`` s while the body moves: only body points near the cloth
-        count (a swinging hand far from a T-shirt does not shorten its steps)."""
+        count (a swinging hand far from a T-shirt does not shorten its steps), by their speed relative
+        to the cloth nearest them (:class:`NearBodySpeed`)."""
         if self.still_step is None:
             return None
         if self._near is None or self.max_speed <= 0:
