@@ -1,7 +1,5 @@
 """The compiled grid broad phase (`tailor/collide/grid.py`): exactly the pairs a brute-force check finds, each once."""
 
-import functools
-
 import numpy as np
 import pytest
 
@@ -50,61 +48,24 @@ def test_vertex_triangle_pairs_are_exactly_the_brute_force_ones(exact, cell):
     assert np.array_equal(near, [any(p * len(x) + q in keys for q in faces[k]) for p, k in got])
 
 
-def _point_segment(p, a, b):
-    d = b - a
-    t = np.clip(np.dot(p - a, d) / max(np.dot(d, d), 1e-300), 0.0, 1.0)
-    return np.linalg.norm(p - (a + t * d))
-
-
-def _segment_distance(a0, a1, b0, b1):
-    """Independent of the compiled one: the interior solution if both parameters fall inside, else the
-    closest of the four end-to-segment distances."""
-    da, db, r = a1 - a0, b1 - b0, a0 - b0
-    m = np.array([[da @ da, -(da @ db)], [-(da @ db), db @ db]])
-    ends = min(_point_segment(a0, b0, b1), _point_segment(a1, b0, b1), _point_segment(b0, a0, a1), _point_segment(b1, a0, a1))
-    if abs(np.linalg.det(m)) > 1e-14:
-        s, t = np.linalg.solve(m, [-(da @ r), db @ r])
-        if 0.0 < s < 1.0 and 0.0 < t < 1.0:
-            return min(ends, np.linalg.norm(r + s * da - t * db))
-    return ends
-
-
-@functools.lru_cache(maxsize=1)
-def _edge_soup():
-    """Edges moving over a step and, by brute force: the pairs the broad phase should give, how many
-    pairs the boxes alone give, and whether any pair left out comes within the radius along the step."""
+@pytest.mark.parametrize("cell", [0.03, 0.5, 0.004])
+def test_edge_edge_pairs_are_exactly_the_brute_force_ones_each_once(cell):
     rng = np.random.default_rng(4)
-    x, faces, _, _ = _soup(rng, faces=200)
-    xp = x + rng.uniform(-0.01, 0.01, x.shape)  # where each vertex was before the step
-    lo, hi = np.minimum(x, xp), np.maximum(x, xp)
-    d = x - xp
+    x, faces, lo, hi = _soup(rng, faces=200)
     edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
-    ids, radius = np.arange(0, len(edges), 4), 0.02
-    want, boxes, missed = set(), 0, 0
+    ids, radius = np.arange(0, len(edges), 2), 0.02
+    *ring, keys = _ring(len(x), faces)
+    pairs, near = edge_edge_pairs(ids, edges, lo, hi, radius, cell, ring)
+    want = set()
     for i, a in enumerate(ids):
         for b in ids[i + 1:]:
             ea, eb = edges[a], edges[b]
-            if set(ea) & set(eb) or _gap(lo[ea].min(0), hi[ea].max(0), lo[eb].min(0), hi[eb].max(0)) > radius:
+            if set(ea) & set(eb):
                 continue
-            boxes += 1
-            apart = max(np.linalg.norm(d[i] - d[j]) for i in ea for j in eb)  # how much closer any two ends came
-            if _segment_distance(*x[ea], *x[eb]) <= radius + apart:
+            if _gap(lo[ea].min(0), hi[ea].max(0), lo[eb].min(0), hi[eb].max(0)) <= radius:
                 want.add(frozenset([tuple(ea), tuple(eb)]))
-            elif any(_segment_distance(*z[ea], *z[eb]) <= radius for z in (xp + s * (x - xp) for s in np.linspace(0, 1, 6))):
-                missed += 1
-    return x, d, faces, lo, hi, edges, ids, radius, want, boxes, missed
-
-
-@pytest.mark.parametrize("cell", [0.03, 0.5, 0.004])
-def test_edge_edge_pairs_are_exactly_the_brute_force_ones_each_once(cell):
-    """Each pair once: those whose boxes meet within the radius and whose segments come within it plus
-    their ends' motion relative to each other; none left out comes within the radius anywhere along the step."""
-    x, d, faces, lo, hi, edges, ids, radius, want, boxes, missed = _edge_soup()
-    *ring, keys = _ring(len(x), faces)
-    pairs, near = edge_edge_pairs(ids, edges, lo, hi, radius, cell, ring, x, x - d)
     got = [frozenset([tuple(p[:2]), tuple(p[2:])]) for p in pairs.tolist()]
     assert len(got) == len(set(got)) and set(got) == want and len(want) > 50
-    assert missed == 0 and len(want) < boxes  # none missed; fewer than the boxes alone give
     assert np.array_equal(near, [any(p * len(x) + q in keys for p in r[:2] for q in r[2:]) for r in pairs.tolist()])
 
 
@@ -139,26 +100,3 @@ def test_binned_boxes_hold_exactly_the_boxes_meeting_each_cell_in_order():
         cell = np.array([a, b, c])
         expected = np.flatnonzero(np.all((first <= cell) & (cell <= last), axis=1))
         assert np.array_equal(items[ptr[key]:ptr[key + 1]], expected)
-
-
-def test_swept_vertex_triangle_pairs_miss_none_that_come_within_the_radius_along_the_step():
-    rng = np.random.default_rng(6)
-    x, faces, _, _ = _soup(rng)
-    xp = x + rng.uniform(-0.01, 0.01, x.shape)
-    lo, hi = np.minimum(x, xp), np.maximum(x, xp)
-    verts, tris, radius = np.arange(0, 300, 3), np.arange(0, 400, 3), 0.025
-    *ring, _ = _ring(len(x), faces)
-    v, t, _ = vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius, 0.03, ring, exact=False, xp=xp)
-    got, boxes = set(zip(v.tolist(), t.tolist())), 0
-    for p in verts:
-        for k in tris:
-            f = faces[k]
-            if p in f or _gap(lo[p], hi[p], lo[f].min(0), hi[f].max(0)) > radius:
-                continue
-            boxes += 1
-            for s in np.linspace(0.0, 1.0, 6):
-                z = xp + s * (x - xp)
-                if np.linalg.norm(z[p] - np.dot(closest_barycentric(z[p], *z[f]), z[f])) <= radius:
-                    assert (p, k) in got
-                    break
-    assert 50 < len(got) < boxes

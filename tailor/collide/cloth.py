@@ -271,10 +271,10 @@ class SelfCollider:
             # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
             # (ignoring those, a strip crumpling over one or two triangles passed through itself)
             vertex, tri, near = vertex_triangle_pairs(verts, faces, self.faces, lo, hi, x, radius, self._grid_cell,
-                                                      self._ring_csr, exact=swept is None, xp=xp)
+                                                      self._ring_csr, exact=swept is None)
             if self.edges:
                 self._ee, self._ee_near = edge_edge_pairs(unique_ints(self._face_edges[faces].ravel()), self._edges, lo,
-                                                          hi, radius, self._grid_cell, self._ring_csr, x, xp)
+                                                          hi, radius, self._grid_cell, self._ring_csr)
             vertex, tri, near = self._drop_ignored(vertex, tri, near)
             order = np.lexsort((tri, vertex))
             vertex, tri, self._tri_near = vertex[order], tri[order], near[order]

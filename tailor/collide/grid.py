@@ -157,10 +157,9 @@ def _shares(p, face):
 
 
 @njit(cache=True)
-def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, motion, check, ptr,
-            items, origin, cell, dims, r):
-    """Count (``fill`` False) or write the triangles within ``r`` of active vertex ``q`` (at ``x``, plus how
-    far the vertex moved relative to the triangle's corners: ``motion`` (N, 3) per vertex over the step)."""
+def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell, dims,
+            r, exact):
+    """Count (``fill`` False) or write the triangles within ``r`` of active vertex ``q``."""
     p = verts[q]
     found = 0
     r2 = r * r
@@ -176,14 +175,13 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
                         continue
                     if not owns(v_lo[q], t_lo[t], r, a, b, c, origin, cell, dims):
                         continue
-                    if check:
+                    if exact:
                         u, v, w = closest_barycentric(x[p], x[f[0]], x[f[1]], x[f[2]])
                         d2 = 0.0
                         for e in range(3):
                             g = x[p, e] - (u * x[f[0], e] + v * x[f[1], e] + w * x[f[2], e])
                             d2 += g * g
-                        reach = r + max(_apart(motion, p, f[0]), _apart(motion, p, f[1]), _apart(motion, p, f[2]))
-                        if d2 > reach * reach:
+                        if d2 > r2:
                             continue
                     if fill:
                         out_v[start + found] = p
@@ -196,38 +194,33 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
 
 
 @njit(cache=True, parallel=True)
-def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, motion, check, origin, cell, dims, r, ring_ptr, ring_idx):
-    """Counted by boxes, written with the distance ``check``, then packed (each distance computed once)."""
+def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx):
     ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
     counts = np.zeros(len(verts), np.int64)
     dummy = np.zeros(0, np.int64)
     no = np.zeros(0, np.bool_)
     for q in prange(len(verts)):
-        counts[q] = _vt_one(q, False, dummy, dummy, no, 0, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, motion,
-                            False, ptr, items, origin, cell, dims, r)
+        counts[q] = _vt_one(q, False, dummy, dummy, no, 0, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin,
+                            cell, dims, r, exact)
     starts = np.zeros(len(verts) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out_v = np.empty(starts[-1], np.int64)
     out_t = np.empty(starts[-1], np.int64)
     out_near = np.empty(starts[-1], np.bool_)
     for q in prange(len(verts)):
-        counts[q] = _vt_one(q, True, out_v, out_t, out_near, starts[q], ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x,
-                            motion, check, ptr, items, origin, cell, dims, r)
-    keep = _packed(starts, counts)
-    return out_v[keep], out_t[keep], out_near[keep]
+        _vt_one(q, True, out_v, out_t, out_near, starts[q], ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell,
+                dims, r, exact)
+    return out_v, out_t, out_near
 
 
-def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool, xp=None):
+def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool):
     """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
     ``verts`` against each of the triangles ``tris`` (rows of ``faces``) not at it whose boxes come
     within ``radius``; ``near``: whether a corner of the triangle is a neighbour of the vertex
     (``ring`` = (ptr, idx): each vertex's neighbours, CSR: :func:`vertex_rings`).
 
-    ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step from ``xp`` to ``x``;
-    both ``x`` for points). Given ``xp``, the triangle at ``x`` must also come within ``radius`` of the
-    vertex plus the most the vertex moved relative to any of its corners (a pair left out is farther
-    than ``radius`` apart all along the step's straight-line motion); with ``exact`` (points), within
-    ``radius``.
+    ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step; both ``x`` for points).
+    With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``.
     """
     verts = np.ascontiguousarray(verts, np.int64)
     tris = np.ascontiguousarray(tris, np.int64)
@@ -237,51 +230,13 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     t_lo, t_hi = np.ascontiguousarray(corners_lo.min(axis=1)), np.ascontiguousarray(corners_hi.max(axis=1))
     v_lo, v_hi = np.ascontiguousarray(lo[verts]), np.ascontiguousarray(hi[verts])
     grid = Grid(np.vstack([t_lo, v_lo - radius]), np.vstack([t_hi, v_hi + radius]), cell)
-    motion = np.zeros((len(x), 3)) if exact or xp is None else np.ascontiguousarray(x - xp, np.float64)
-    return _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), motion,
-                     bool(exact or xp is not None), grid.origin, grid.cell, grid.dims, float(radius), *ring)
-
-
-@njit(cache=True, inline="always")
-def _apart(d, i, j):
-    """|d[i] − d[j]|: how much closer two points can have come over a step that moved them by ``d``."""
-    g = 0.0
-    for k in range(3):
-        h = d[i, k] - d[j, k]
-        g += h * h
-    return math.sqrt(g)
-
-
-@njit(cache=True, inline="always")
-def _segment_distance2(x, a0, a1, b0, b1):
-    """Squared distance between the segments a0–a1 and b0–b1 (rows of ``x``)."""
-    d1 = (x[a1, 0] - x[a0, 0], x[a1, 1] - x[a0, 1], x[a1, 2] - x[a0, 2])
-    d2 = (x[b1, 0] - x[b0, 0], x[b1, 1] - x[b0, 1], x[b1, 2] - x[b0, 2])
-    r = (x[a0, 0] - x[b0, 0], x[a0, 1] - x[b0, 1], x[a0, 2] - x[b0, 2])
-    a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
-    e = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
-    f = d2[0] * r[0] + d2[1] * r[1] + d2[2] * r[2]
-    c = d1[0] * r[0] + d1[1] * r[1] + d1[2] * r[2]
-    b = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
-    den = a * e - b * b
-    s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 1e-30 and a > 1e-30 else 0.0
-    t = (b * s + f) / e if e > 1e-30 else 0.0
-    if t < 0.0 or t > 1.0:  # clamp t, then s again for the clamped t
-        t = min(max(t, 0.0), 1.0)
-        s = min(max((t * b - c) / a, 0.0), 1.0) if a > 1e-30 else 0.0
-    g = 0.0
-    for k in range(3):
-        h = r[k] + s * d1[k] - t * d2[k]
-        g += h * h
-    return g
+    return _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
+                     grid.cell, grid.dims, float(radius), bool(exact), *ring)
 
 
 @njit(cache=True)
-def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, x, motion, check, ptr, items, origin,
-            cell, dims, r):
-    """Count (``fill`` False) or write the edges after active edge ``q`` within ``r`` of it, sharing no end
-    (the segments at ``x`` closer than ``r`` plus how far their ends moved relative to each other:
-    ``motion`` (N, 3) per vertex over the step)."""
+def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r):
+    """Count (``fill`` False) or write the edges after active edge ``q`` within ``r`` of it, sharing no end."""
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     r2 = r * r
@@ -301,11 +256,6 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                         continue
                     if not owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
                         continue
-                    if check:
-                        reach = r + max(_apart(motion, a0, b0), _apart(motion, a0, b1), _apart(motion, a1, b0),
-                                        _apart(motion, a1, b1))
-                        if _segment_distance2(x, a0, a1, b0, b1) > reach * reach:
-                            continue
                     if fill:
                         out[start + found, 0] = a0
                         out[start + found, 1] = a1
@@ -320,48 +270,28 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs(ids, edges, e_lo, e_hi, x, motion, check, origin, cell, dims, r, ring_ptr, ring_idx):
-    """Counted by boxes, written with the distance ``check``, then packed (each distance computed once)."""
+def _ee_pairs(ids, edges, e_lo, e_hi, origin, cell, dims, r, ring_ptr, ring_idx):
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     counts = np.zeros(len(ids), np.int64)
     dummy = np.zeros((0, 4), np.int64)
     no = np.zeros(0, np.bool_)
     for q in prange(len(ids)):
-        counts[q] = _ee_one(q, False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, x, motion, False, ptr, items,
-                            origin, cell, dims, r)
+        counts[q] = _ee_one(q, False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r)
     starts = np.zeros(len(ids) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out = np.empty((starts[-1], 4), np.int64)
     out_near = np.empty(starts[-1], np.bool_)
     for q in prange(len(ids)):
-        counts[q] = _ee_one(q, True, out, out_near, starts[q], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, x, motion, check, ptr,
-                            items, origin, cell, dims, r)
-    keep = _packed(starts, counts)
-    return out[keep], out_near[keep]
+        _ee_one(q, True, out, out_near, starts[q], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell,
+                dims, r)
+    return out, out_near
 
 
-@njit(cache=True)
-def _packed(starts, counts):
-    """The slots in use when each query ``q`` filled the first ``counts[q]`` of its ``starts[q]``… range."""
-    out = np.empty(counts.sum(), np.int64)
-    at = 0
-    for q in range(len(counts)):
-        for k in range(starts[q], starts[q] + counts[q]):
-            out[at] = k
-            at += 1
-    return out
-
-
-def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, x=None, xp=None):
+def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
-    share no end and come within ``radius`` of each other, each pair once; ``near``: whether an end
-    of one is a neighbour of an end of the other (``ring`` as in :func:`vertex_triangle_pairs`).
-
-    ``lo``/``hi`` (N, 3) are boxes round every vertex: where it is over a step, from where it was
-    (``xp``; points at ``x`` without it) to ``x``. Given ``x``, a pair is also kept only when the
-    segments at ``x`` are closer than ``radius`` plus the most any end of one moved relative to any
-    end of the other (a point of either moves as a mean of its ends): a pair left out is farther
-    than ``radius`` apart all along the step's straight-line motion. Without ``x``, boxes alone."""
+    share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
+    pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
+    :func:`vertex_triangle_pairs`)."""
     ids = np.ascontiguousarray(ids, np.int64)
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
@@ -369,8 +299,5 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, x=None
     e_lo = np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]]))
     e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
     grid = Grid(e_lo - radius, e_hi + radius, cell)
-    check = x is not None
-    x = np.ascontiguousarray(lo if x is None else x, np.float64)
-    motion = np.zeros_like(x) if xp is None else np.ascontiguousarray(x - xp, np.float64)
-    return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, x, motion, check, grid.origin, grid.cell,
-                     grid.dims, float(radius), *ring)
+    return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, grid.origin, grid.cell, grid.dims,
+                     float(radius), *ring)
