@@ -9,7 +9,7 @@ from .broad import BOX_CELL, NearCubes, TriangleBoxes, clustered_query
 from .closest import nearest_into
 from .contacts import NO_CONTACTS, Contacts
 from .drift import BodyDrift
-from .inside import points_inside
+from .inside import InsideTest
 
 __all__ = ["BodyCollider", "body_gap", "GAP_REACH"]
 
@@ -79,6 +79,7 @@ class BodyCollider:
         self._drifts = {}  # (frame, frame) → the body's BodyDrift between them
         self._previous = None  # signed distance of every vertex after the last response
         self._seen: _Seen | None = None  # where the cloth and the body were at the last response
+        self._inside_test = None  # (body positions, their InsideTest)
         self.deepest = 0.0  # deepest penetration any response found [m]
         self.queries = 0
         self.queried_points = 0
@@ -138,6 +139,14 @@ class BodyCollider:
             self._drifts[key] = BodyDrift(self.frames[a], self.frames[b], self.faces, self.margin)
         return self._drifts[key]
 
+    def _inside(self, points, body_x) -> np.ndarray:
+        """Whether each point lies inside the closed body at ``body_x`` (:class:`InsideTest`, binned once
+        per body position: a still body is asked many times over)."""
+        kept = self._inside_test
+        if kept is None or not (kept[0] is body_x or np.array_equal(kept[0], body_x)):
+            kept = self._inside_test = (np.array(body_x, float), InsideTest(body_x, self.faces))
+        return kept[1](points)
+
     def _csr(self, keys, n):
         """(ptr, tri) of sorted keys ``vertex · F + triangle`` over ``n`` vertices."""
         ptr = np.concatenate([[0], np.cumsum(np.bincount(keys // len(self.faces), minlength=n))]).astype(np.int64)
@@ -185,7 +194,7 @@ class BodyCollider:
         dist, tri, bary, normal = found
         deep = np.flatnonzero((tri >= 0) & (dist < -0.5 * self.margin))
         if len(deep):
-            out = deep[~points_inside(x[deep], body_x, self.faces)]
+            out = deep[~self._inside(x[deep], body_x)]
             tri[out], dist[out] = -1, np.inf
         return dist, tri, bary, normal
 
@@ -216,7 +225,7 @@ class BodyCollider:
 
         Returns (ids, their closest triangles, barycentrics, the points moved out (K, 3))."""
         test = np.arange(len(points)) if skip is None else np.flatnonzero(~np.asarray(skip, bool))
-        inside = test[points_inside(points[test], body_x, self.faces)]
+        inside = test[self._inside(points[test], body_x)]
         if not len(inside):
             return inside, inside, np.zeros((0, 3)), np.zeros((0, 3))
         keys = self._query(points[inside], frame, np.arange(len(inside)), radius=reach)
