@@ -14,6 +14,11 @@ from .inside import InsideTest
 __all__ = ["BodyCollider", "body_gap", "GAP_REACH"]
 
 
+def _same(a, b) -> bool:
+    """Whether two arrays of body positions are the same (a still body is handed over again and again)."""
+    return a is b or np.array_equal(a, b)
+
+
 class _Kept:
     """The body collider's cached candidates: per vertex the triangles found within the margin, where
     the vertex was when its budget was last counted (``ref``) and how much of half the margin it has
@@ -48,7 +53,7 @@ class _Seen:
     def drift(self, body_x, faces) -> BodyDrift:
         """The body's :class:`BodyDrift` from then to ``body_x`` (the same positions asked again: the same one)."""
         d = self._drift
-        if d is None or not (d[0] is body_x or np.array_equal(d[0], body_x)):
+        if d is None or not _same(d[0], body_x):
             d = self._drift = (body_x.copy(), BodyDrift(self.body, body_x, faces, self.reach))
         return d[1]
 
@@ -143,7 +148,7 @@ class BodyCollider:
         """Whether each point lies inside the closed body at ``body_x`` (:class:`InsideTest`, binned once
         per body position: a still body is asked many times over)."""
         kept = self._inside_test
-        if kept is None or not (kept[0] is body_x or np.array_equal(kept[0], body_x)):
+        if kept is None or not _same(kept[0], body_x):
             kept = self._inside_test = (np.array(body_x, float), InsideTest(body_x, self.faces))
         return kept[1](points)
 

@@ -260,7 +260,6 @@ class NearCubes:
         order = np.argsort(keys, kind="stable")
         self._boxes = boxes_[order]
         self._ptr = np.searchsorted(keys[order], np.append(self._known, np.iinfo(np.int64).max)).astype(np.int64)
-        self._ptr[-1] = len(keys)
 
 
 @njit(cache=True, inline="always")

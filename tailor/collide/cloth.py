@@ -111,6 +111,11 @@ def in_sorted(keys, q):
     return keys[at] == q
 
 
+def _same_mask(a, b) -> bool:
+    """Whether two optional arrays (None: none) are the same."""
+    return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
+
+
 class SelfCollider:
     """Self-collision of one cloth mesh (module docstring).
 
@@ -306,10 +311,7 @@ class SelfCollider:
         if mask is not None and keep is not None and len(keep):
             p = np.asarray(keep, np.int64).reshape(-1, 2)
             keys = unique_ints(np.r_[p[:, 0] * self.n + p[:, 1], p[:, 1] * self.n + p[:, 0]])
-        same = (mask is None and self._ignored is None) or (
-            mask is not None and self._ignored is not None and np.array_equal(mask, self._ignored)
-            and np.array_equal(keys, self._kept))
-        if not same:
+        if not (_same_mask(mask, self._ignored) and _same_mask(keys, self._kept)):
             self._ignored, self._kept = mask, keys
             self._anchor = None  # query again
 
@@ -318,8 +320,7 @@ class SelfCollider:
         altogether, not even obstacles, and cost the broad phase nothing: an outfit's garments waiting
         outside while the one inside sews (it is placed afresh over the sewn one before its own stage)."""
         mask = None if vertices is None or not np.any(vertices) else np.asarray(vertices, bool)
-        if not ((mask is None and self._left_out is None)
-                or (mask is not None and self._left_out is not None and np.array_equal(mask, self._left_out))):
+        if not _same_mask(mask, self._left_out):
             self._left_out = mask
             self._anchor = None  # query again
 
