@@ -69,6 +69,28 @@ def test_edge_edge_pairs_are_exactly_the_brute_force_ones_each_once(cell):
     assert np.array_equal(near, [any(p * len(x) + q in keys for p in r[:2] for q in r[2:]) for r in pairs.tolist()])
 
 
+@pytest.mark.parametrize("cell", [0.03, 0.004])
+def test_edge_edge_pairs_of_dirty_edges_are_the_brute_force_ones_touching_them_each_once(cell):
+    """A partial query: only the pairs with at least one dirty edge, each once, none among clean ones."""
+    rng = np.random.default_rng(5)
+    x, faces, lo, hi = _soup(rng, faces=200)
+    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    ids, radius = np.arange(len(edges)), 0.02
+    dirty = rng.random(len(ids)) < 0.2
+    ring = _ring(len(x), faces)[:2]
+    pairs, _ = edge_edge_pairs(ids, edges, lo, hi, radius, cell, ring, dirty=dirty)
+    want = set()
+    for i in range(len(ids)):
+        for j in range(i + 1, len(ids)):
+            ea, eb = edges[ids[i]], edges[ids[j]]
+            if not (dirty[i] or dirty[j]) or set(ea) & set(eb):
+                continue
+            if _gap(lo[ea].min(0), hi[ea].max(0), lo[eb].min(0), hi[eb].max(0)) <= radius:
+                want.add(frozenset([tuple(ea), tuple(eb)]))
+    got = [frozenset([tuple(p[:2]), tuple(p[2:])]) for p in pairs.tolist()]
+    assert len(got) == len(set(got)) and set(got) == want and len(want) > 20
+
+
 def test_a_grid_over_a_vast_extent_keeps_to_its_cell_budget():
     grid = Grid(np.zeros((1, 3)), np.full((1, 3), 100.0), 1e-3)
     assert np.prod(grid.dims) <= 1.05 * MAX_CELLS  # one cell more per axis at most

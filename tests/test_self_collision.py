@@ -310,7 +310,7 @@ def test_cloth_contact_holds_the_vertices_pinned_now(monkeypatch):
 def test_patches_sharing_a_vertex_are_found_as_by_brute_force():
     from itertools import combinations
 
-    from tailor.collide.cloth import _shared_vertex_pairs
+    from tailor.collide.regions import _shared_vertex_pairs
 
     rng = np.random.default_rng(3)
     faces, patch = rng.integers(0, 40, (90, 3)), rng.integers(0, 7, 90)
@@ -380,3 +380,33 @@ def test_a_panel_left_out_is_neither_a_contact_nor_a_candidate_until_it_is_let_b
     (out, out_pairs), (back, back_pairs) = found
     assert out == 0 and back > 0
     assert out_pairs < back_pairs  # the upper panel's own pairs only
+
+
+def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair():
+    """A strip swinging over a still panel: the still panel keeps its candidates (partial queries
+    find again only the pairs touching vertices that moved from their anchors), and after every
+    step each vertex–triangle pair within the thickness is among them."""
+    from tailor.collide.cloth_kernels import unique_ints
+    from tailor.collide.grid import vertex_triangle_pairs
+
+    model, x0 = stacked(0.004, 0.0, offset=0.0, size=0.2, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+    state = model.state(x0.copy(), np.zeros_like(x0))
+    inv_mass = 1.0 / np.asarray(model.vertex_mass)
+    rng = np.random.default_rng(2)
+    corner = upper & (x0[:, 0] > 0.05)  # a corner of the upper panel flaps; the rest lies still
+    near_pairs = 0
+    for step in range(30):
+        v = np.zeros_like(x0)
+        v[corner] = rng.normal(0.0, 0.6, 3)
+        state = model.state(state.x + 0.01 * v, v)
+        collider.respond(inv_mass, state, 0.01)
+        rx = state.x - state.x.mean(axis=0)
+        faces = np.arange(len(model.faces))
+        near_v, near_t, _ = vertex_triangle_pairs(unique_ints(model.faces.ravel()), faces, collider.faces, rx, rx, rx, 0.003,
+                                                  collider._grid_cell, collider._ring_csr, exact=True)
+        held = set(zip(collider._vtx.tolist(), collider._tri.tolist()))
+        assert set(zip(near_v.tolist(), near_t.tolist())) <= held, step
+        near_pairs += len(near_v)
+    assert collider.stats["partial_queries"] > 0 and near_pairs > 0

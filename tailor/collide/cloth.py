@@ -3,20 +3,17 @@
 Detection (Carignan §3.4: "any triangle, including those belonging to the cloth itself, within a
 threshold distance from the cloth's vertices") runs in three stages:
 
-1. **Regions** (``mode="auto"``): the garment is cut into patches about ``patch`` metres across.
-   Their bounding boxes, inflated by the query radius, are swept against one another
-   (:func:`~tailor.collide.grid.overlapping_boxes`). A patch
-   takes part only if it overlaps a patch that is not its neighbour or a neighbour's neighbour,
-   or if it (or it with a nearby patch) is folded: a surface whose normals all lie within 60° of
-   one direction is a height field over it and cannot come near itself except through its own
-   neighbourhood (Volino & Magnenat-Thalmann's normal-cone argument). Flat cloth is skipped.
+1. **Regions** (``mode="auto"``, :mod:`tailor.collide.regions`): only patches that overlap a patch
+   beyond their neighbourhood, or are folded, take part. Flat cloth is skipped.
 2. **Broad phase**: the active triangles that come within ``thickness + margin`` of an active
    vertex anywhere on the step's straight-line motion, and the active edges that come that near
    one another, found between boxes swept from each vertex's place at the last step to its place
-   now, over a compiled uniform grid rebuilt each query (:mod:`tailor.collide.grid`: python-fcl
-   can neither refit nor hand back pairs without a Python object each). The candidates stay
-   valid while no vertex has moved more than ``margin / 2`` relative to the cloth's centroid
-   since the query (two points then approach by less than ``margin``). Swept boxes are tight
+   now (relative to the cloth's centroid), over a compiled uniform grid rebuilt each query
+   (:mod:`tailor.collide.grid`: python-fcl can neither refit nor hand back pairs without a Python
+   object each). Each vertex is anchored where it was last queried; a pair stays valid while
+   neither end moves ``margin / 2`` from its anchor (two points then approach by less than
+   ``margin``). When some vertices have, only the pairs touching them are found again (the others'
+   anchors are their boxes); when most have, all are. Swept boxes are tight
    for cloth falling or swinging as a whole, where one radius for every pair (``margin`` plus
    twice the step's largest displacement relative to the centroid) grows with the fastest part
    of the cloth and pairs everything with everything (docs/measurements.md has the numbers).
@@ -51,30 +48,31 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import SimulationUnstable
-from .cloth_kernels import PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts, unique_ints
+from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
+                            touching, unique_ints)
 from .grid import edge_edge_pairs, overlapping_boxes, vertex_rings, vertex_triangle_pairs
 from .layers import Layers
+from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
-FOLDED_COS = 0.5
-"""A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
 GRID_EDGES = 2.0
 """Side of the broad phase's grid cells, in mean edge lengths of the cloth."""
-PATCH_EDGES = 2.5
-"""Default patch size of ``auto``, in mean edge lengths of the cloth, and at least :data:`PATCH_MIN`:
-a 10 cm patch of a sleeve (a tube of 5 cm radius) spreads its normals over 115° and takes part,
-though no sleeve touches itself there (docs/measurements.md, "Third speed day")."""
-PATCH_MIN = 0.05
-"""See ``PATCH_EDGES`` [m]: smaller patches cost more box pairs than they save."""
 MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
+
+PARTIAL_SHARE = 0.5
+"""When more of the vertices than this have moved from their anchors, every candidate is found
+again; fewer, only the pairs touching them."""
+
+REANCHOR = 0.5
+"""A partial query also anchors again the vertices this far through their ``margin / 2``."""
 
 SELF_MARGIN = 0.01
 """[m] Default query margin: candidates are the pairs within the thickness plus this anywhere on the
@@ -87,28 +85,6 @@ MAX_RELATIVE_SPEED = 20.0
 """[m/s] No part of a garment moves this fast relative to the rest of it (sewing and walking drapes
 stay under 5 m/s); a step beyond it is an exploding state, whose swept boxes would make the next
 query take minutes: it stops with :class:`SimulationUnstable` instead."""
-
-
-def _shared_vertex_pairs(vertex, patch, count: int):
-    """Sorted distinct keys ``i · count + j`` (i < j) of the patches that share a vertex, from each
-    face corner's ``vertex`` and ``patch``: the distinct (vertex, patch) rows sorted by vertex,
-    each row paired with the rows 1, 2, … after it while they are of the same vertex."""
-    key = np.unique(np.asarray(vertex, np.int64) * count + patch)
-    v, p = key // count, key % count
-    keys = []
-    for d in range(1, len(key)):
-        same = np.flatnonzero(v[d:] == v[:-d])
-        if not len(same):
-            break
-        keys.append(p[same] * count + p[same + d])  # sorted by patch within a vertex: p[i] < p[i + d]
-    return np.unique(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
-
-
-def in_sorted(keys, q):
-    """Whether each of ``q`` is in the sorted, non-empty 1-D array ``keys``: a binary search
-    (``np.isin`` sorts both arrays on every call)."""
-    at = np.minimum(np.searchsorted(keys, q), len(keys) - 1)
-    return keys[at] == q
 
 
 def _same_mask(a, b) -> bool:
@@ -168,9 +144,10 @@ class SelfCollider:
         self._grid_cell = GRID_EDGES * float(np.mean(length)) if len(length) else 1.0
         if patch is None:
             patch = max(PATCH_MIN, PATCH_EDGES * float(np.mean(length))) if len(length) else 0.1
-        self._patches(np.asarray(face_group), np.asarray(x, float), patch)
+        self.regions = Regions(self.faces, np.asarray(face_group), np.asarray(x, float), patch)
         self._ee = np.zeros((0, 4), np.int64)
-        self._anchor = None  # positions relative to the centroid at the last query
+        self._anchor = None  # (N, 3) each vertex's position relative to the centroid when last queried
+        self._active = None  # (F,) bool: the faces the candidates were found among
         self._reach = self.margin  # how deep a pair may have crossed in a step (the narrow phase cut-off beyond thickness)
         self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
@@ -180,126 +157,121 @@ class SelfCollider:
         self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
         self._kept = None  # sorted vertex-pair keys that keep contact though ignored
         self._left_out = None  # (N,) bool: vertices out of the simulation for now (an outfit's garment waiting to sew)
-        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1,
+        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1, "partial_queries": 0,
                       "query_s": 0.0, "response_s": 0.0}
 
-    # -- regions ---------------------------------------------------------------------------------
-    def _patches(self, group, x, size):
-        centroid = x[self.faces].mean(axis=1)
-        cell = np.floor(centroid / size).astype(np.int64)
-        key = np.column_stack([group, cell])
-        _, patch = np.unique(key, axis=0, return_inverse=True)
-        patch = patch.ravel()
-        self.face_patch = patch
-        self.patch_count = int(patch.max()) + 1 if len(patch) else 0
-        self._order = np.argsort(patch, kind="stable")
-        self._starts = np.searchsorted(patch[self._order], np.arange(self.patch_count))
-        # each patch's vertices (CSR, grouped by patch): its box is theirs, a sixth of the faces' corners
-        corner_keys = unique_ints(np.repeat(patch, 3).astype(np.int64) * max(self.n, 1) + self.faces.ravel())
-        self._patch_vertices = corner_keys % max(self.n, 1)
-        self._patch_vertex_starts = np.searchsorted(corner_keys // max(self.n, 1), np.arange(self.patch_count))
-        # patches sharing a vertex are neighbours
-        near = _shared_vertex_pairs(self.faces.ravel(), np.repeat(patch, 3), self.patch_count)
-        # neighbours of neighbours too: patches whose corners merely touch are not a fold either
-        a = sp.coo_matrix((np.ones(len(near)), (near // self.patch_count, near % self.patch_count)),
-                          shape=(self.patch_count,) * 2).tocsr()
-        a = a + a.T + sp.identity(self.patch_count, format="csr")
-        a2 = (a @ a).tocoo()
-        self._adjacent = np.unique(a2.row.astype(np.int64) * self.patch_count + a2.col)
-
     def active_faces(self, x, vertex_boxes=None):
-        """Faces of the patches that can touch themselves or one another (``auto``), at ``x`` or,
-        with ``vertex_boxes`` (lo, hi) per vertex, anywhere in them."""
-        if self.mode == "on" or self.patch_count <= 1:
+        """Faces that can touch themselves or one another (``auto``: :meth:`Regions.active_faces`), at
+        ``x`` or, with ``vertex_boxes`` (lo, hi) per vertex, anywhere in them."""
+        if self.mode == "on" or self.regions.count <= 1:
             return np.arange(len(self.faces))
-        corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
-        lo, hi = (x, x) if vertex_boxes is None else vertex_boxes
-        lo = np.minimum.reduceat(lo[self._patch_vertices], self._patch_vertex_starts)
-        hi = np.maximum.reduceat(hi[self._patch_vertices], self._patch_vertex_starts)
-        e1 = corners[:, 1] - corners[:, 0]
-        e2 = corners[:, 2] - corners[:, 0]
-        fn = np.cross(e1, e2)  # area-weighted normals
-        mean = np.add.reduceat(fn, self._starts)
-        mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
-        unit = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
-        cos_face = np.einsum("ij,ij->i", unit, np.repeat(mean, np.diff(np.append(self._starts, len(unit))), axis=0))
-        spread = np.arccos(np.clip(np.minimum.reduceat(cos_face, self._starts), -1.0, 1.0))  # cone half-angle
-        limit = math.acos(FOLDED_COS)
-        active = spread > limit
-        pad = 0.5 * (self.thickness + self.margin)
-        i, j = overlapping_boxes(lo - pad, hi + pad)
-        if len(i):
-            key = np.minimum(i, j) * self.patch_count + np.maximum(i, j)
-            adjacent = in_sorted(self._adjacent, key)
-            between = np.arccos(np.clip(np.einsum("ij,ij->i", mean[i], mean[j]), -1.0, 1.0))
-            folded = 0.5 * between + np.maximum(spread[i], spread[j]) > limit
-            hit = ~adjacent | folded
-            active[i[hit]] = True
-            active[j[hit]] = True
-        return np.flatnonzero(active[self.face_patch])
+        return self.regions.active_faces(x, vertex_boxes, 0.5 * (self.thickness + self.margin))
 
     # -- broad phase -----------------------------------------------------------------------------
-    @staticmethod
-    def _moved(x, x0):
-        """Largest displacement [m] of a vertex relative to the cloth's centroid from ``x0`` to ``x``."""
-        if x0 is None or len(x0) != len(x):
-            return math.inf
-        return float(np.linalg.norm((x - x.mean(axis=0)) - (x0 - x0.mean(axis=0)), axis=1).max())
+    def _drift(self, rx, rxp):
+        """(N,) each vertex's squared distance from its anchor, now (``rx``) or at the last step
+        (``rxp``), positions relative to the centroid; None: no anchors."""
+        if self._anchor is None or len(self._anchor) != len(rx):
+            return None
+        d = np.einsum("ij,ij->i", rx - self._anchor, rx - self._anchor)
+        if rxp is not None:
+            d = np.maximum(d, np.einsum("ij,ij->i", rxp - self._anchor, rxp - self._anchor))
+        return d
 
-    def _query(self, x, xp, step):
+    def _query(self, rx, rxp, step, moving=None):
         """Candidates: the pairs that come within ``thickness + margin`` anywhere on the step's
-        straight-line motion from ``xp`` to ``x`` (swept boxes round each vertex and triangle: fast
-        but uniform motion, cloth falling as a whole, adds no pairs). They stay valid while no
-        vertex moves ``margin / 2`` relative to the cloth's centroid from ``x`` (two points then
-        approach by less than ``margin``). ``step`` (the step's largest relative displacement)
-        bounds how deep a pair can have crossed: the narrow phase ignores pairs further apart."""
+        straight-line motion from ``rxp`` to ``rx`` (positions relative to the centroid; swept boxes
+        round each vertex and triangle: fast but uniform motion, cloth falling as a whole, adds no
+        pairs). Each vertex is anchored where it was queried; a pair stays valid while neither end
+        moves ``margin / 2`` from its anchor (they then approach by less than ``margin``). With
+        ``moving`` (the vertices that did), only the pairs touching them are found again, the others
+        kept: their anchors are boxes too. ``step`` (the step's largest relative displacement) bounds
+        how deep a pair can have crossed: the narrow phase ignores pairs further apart."""
         t0 = time.perf_counter()
         self._reach = self.margin + (2.0 * step if math.isfinite(step) else 0.0)
-        radius = self.thickness + self.margin
-        swept = None if xp is None else (np.minimum(x, xp), np.maximum(x, xp))  # each vertex's box over the step
-        faces = self.active_faces(x, swept)
-        if self._left_out is not None:
-            faces = faces[~self._left_out[self.faces[faces]].all(axis=1)]
-        self._vtx = np.zeros(0, np.int64)
-        self._tri = np.zeros(0, np.int64)
-        self._ee = np.zeros((0, 4), np.int64)
-        self._tri_near = np.zeros(0, bool)
-        self._ee_near = np.zeros(0, bool)
-        self._tri_side = np.zeros(0, np.int8)
-        self._ee_toward = np.zeros((0, 3))
-        if len(faces):
-            verts = unique_ints(self.faces[faces].ravel())
-            if self._left_out is not None:
-                verts = verts[~self._left_out[verts]]
-            lo, hi = (x, x) if swept is None else swept
-            # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
-            # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
-            # (ignoring those, a strip crumpling over one or two triangles passed through itself)
-            vertex, tri, near = vertex_triangle_pairs(verts, faces, self.faces, lo, hi, x, radius, self._grid_cell,
-                                                      self._ring_csr, exact=swept is None)
-            if self.edges:
-                self._ee, self._ee_near = edge_edge_pairs(unique_ints(self._face_edges[faces].ravel()), self._edges, lo,
-                                                          hi, radius, self._grid_cell, self._ring_csr)
-            vertex, tri, near = self._drop_ignored(vertex, tri, near)
-            order = np.lexsort((tri, vertex))
-            vertex, tri, self._tri_near = vertex[order], tri[order], near[order]
-            self._vtx = np.ascontiguousarray(vertex, dtype=np.int64)
-            self._tri = tri
-            self._layer_sides(x)
-            self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
-            self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
-        self._anchor = x.copy()
-        self.stats["queries"] += 1
+        lo, hi = (rx, rx) if rxp is None else (np.minimum(rx, rxp), np.maximum(rx, rxp))  # each vertex's box over the step
+        if moving is not None:  # the others stay at their anchors
+            still = ~moving
+            lo, hi = np.where(still[:, None], self._anchor, lo), np.where(still[:, None], self._anchor, hi)
+        faces = self._active_now(rx, lo, hi)
+        dirty = None
+        if moving is not None:
+            # faces no query has seen: their vertices are queried as if they had moved
+            moving = moving.copy()
+            moving[self.faces[faces[~self._active[faces]]].ravel()] = True
+            dirty = moving
+            self._active[faces] = True
+            faces = np.flatnonzero(self._active)
+            self._anchor[moving] = rx[moving]
+            self.stats["partial_queries"] += 1
+        else:
+            self._active = np.zeros(len(self.faces), bool)
+            self._active[faces] = True
+            self._anchor = rx.copy()
+            self.stats["queries"] += 1
+        self._find(rx, lo, hi, faces, dirty, exact=rxp is None)
         self.stats["query_s"] += time.perf_counter() - t0
 
-    def _layer_sides(self, x) -> None:
-        """Each candidate's fixed side (:class:`Layers`; none for a single garment)."""
+    def _active_now(self, x, lo, hi):
+        """The faces that take part now (:meth:`active_faces` without the left-out garments)."""
+        faces = self.active_faces(x, (lo, hi))
+        if self._left_out is not None:
+            faces = faces[~self._left_out[self.faces[faces]].all(axis=1)]
+        return faces
+
+    def _find(self, x, lo, hi, faces, dirty, *, exact):
+        """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the
+        pairs touching a dirty vertex added to the kept ones that touch none."""
+        verts = unique_ints(self.faces[faces].ravel())
+        if self._left_out is not None:
+            verts = verts[~self._left_out[verts]]
+        radius = self.thickness + self.margin
+        # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
+        # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
+        # (ignoring those, a strip crumpling over one or two triangles passed through itself)
+        find = partial(vertex_triangle_pairs, faces=self.faces, lo=lo, hi=hi, x=x, radius=radius, cell=self._grid_cell,
+                       ring=self._ring_csr, exact=exact)
+        edge_ids = unique_ints(self._face_edges[faces].ravel())
+        if dirty is None:
+            vertex, tri, near = find(verts, faces)
+            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, None)
+        else:
+            dirty_face = touching(self.faces[faces], dirty)
+            moved = dirty[verts]
+            parts = (find(verts[moved], faces), find(verts[~moved], faces[dirty_face]))
+            vertex, tri, near = (np.concatenate(p) for p in zip(*parts))
+            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty))
+        vertex, tri, near, ee, ee_near = self._drop_ignored(vertex, tri, near, ee, ee_near)
+        tri_side = self._tri_sides(vertex, tri)
+        if dirty is not None:  # the kept candidates: no end moved
+            keep = ~(dirty[self._vtx] | touching(self.faces[self._tri], dirty))
+            vertex, tri, near, tri_side = (np.concatenate([a[keep], b]) for a, b in
+                                           ((self._vtx, vertex), (self._tri, tri), (self._tri_near, near), (self._tri_side, tri_side)))
+            keep = ~touching(self._ee, dirty)
+            ee, ee_near = np.concatenate([self._ee[keep], ee]), np.concatenate([self._ee_near[keep], ee_near])
+        self._vtx, self._tri = np.ascontiguousarray(vertex, dtype=np.int64), np.ascontiguousarray(tri, dtype=np.int64)
+        self._tri_near, self._tri_side = near, tri_side
+        self._ee, self._ee_near, self._ee_toward = ee, ee_near, self._edge_directions(x, ee)
+        self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
+        self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
+
+    def _edge_pairs(self, ids, lo, hi, dirty):
+        if not self.edges:
+            return np.zeros((0, 4), np.int64), np.zeros(0, bool)
+        return edge_edge_pairs(ids, self._edges, lo, hi, self.thickness + self.margin, self._grid_cell, self._ring_csr,
+                               dirty=dirty)
+
+    def _tri_sides(self, vertex, tri):
+        """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""
         if self.layers is None:
-            self._tri_side = np.zeros(len(self._tri), np.int8)
-            self._ee_toward = np.zeros((len(self._ee), 3))
-            return
-        self._tri_side = self.layers.vertex_triangle_sides(self._vertex_layer, self._vtx, self._tri)
-        self._ee_toward = self.layers.edge_directions(self._vertex_layer, self.faces, x, self._ee)
+            return np.zeros(len(tri), np.int8)
+        return self.layers.vertex_triangle_sides(self._vertex_layer, vertex, tri)
+
+    def _edge_directions(self, x, ee):
+        """Each edge–edge candidate's outward direction at ``x`` (:class:`Layers`; none for a single garment)."""
+        if self.layers is None:
+            return np.zeros((len(ee), 3))
+        return self.layers.edge_directions(self._vertex_layer, self.faces, x, ee)
 
     def ignore(self, vertices, keep=None) -> None:
         """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact, as a
@@ -330,21 +302,21 @@ class SelfCollider:
             return np.zeros(np.broadcast(a, b).shape, bool)
         return in_sorted(self._kept, a * self.n + b)
 
-    def _drop_ignored(self, vertex, tri, near):
+    def _drop_ignored(self, vertex, tri, near, ee, ee_near):
         """The vertex–triangle and edge–edge candidates without the ignored vertices (but the kept pairs)."""
         if self._ignored is None:
-            return vertex, tri, near
+            return vertex, tri, near, ee, ee_near
         corners = self.faces[tri]
-        keep = ~self._ignored[vertex] & ~self._ignored[corners].any(axis=1)
+        keep = ~(self._ignored[vertex] | touching(corners, self._ignored))
         touched = np.flatnonzero(~keep)  # only these can be saved by a kept pair
         keep[touched] = self._is_kept(vertex[touched, None], corners[touched]).any(axis=1)
-        if len(self._ee):
-            ee = ~self._ignored[self._ee].any(axis=1)
-            touched = np.flatnonzero(~ee)
-            a, b = self._ee[touched, :2], self._ee[touched, 2:]
-            ee[touched] = self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), 4).any(axis=1)
-            self._ee, self._ee_near = self._ee[ee], self._ee_near[ee]
-        return vertex[keep], tri[keep], near[keep]
+        if len(ee):
+            keep_ee = ~touching(ee, self._ignored)
+            touched = np.flatnonzero(~keep_ee)
+            a, b = ee[touched, :2], ee[touched, 2:]
+            keep_ee[touched] = self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), 4).any(axis=1)
+            ee, ee_near = ee[keep_ee], ee_near[keep_ee]
+        return vertex[keep], tri[keep], near[keep], ee, ee_near
 
     @property
     def candidate_pairs(self) -> int:
@@ -365,17 +337,7 @@ class SelfCollider:
                                      "try a smaller time step or the implicit integrator")
         self.stats["steps"] += 1
         xp = self._x_prev if self._x_prev is not None and len(self._x_prev) == len(x) else None
-        moved = self._moved(x, self._anchor)
-        if xp is not None:
-            moved = max(moved, self._moved(xp, self._anchor))
-        if moved >= 0.5 * self.margin:
-            step = self._moved(x, xp)
-            if xp is not None and step > MAX_RELATIVE_SPEED * dt:
-                raise SimulationUnstable(
-                    f"simulation unstable at t = {state.t:.4f} s (Δt = {dt:.3g} s): part of the cloth moved {step:.3g} m "
-                    f"relative to the rest in one step ({step / dt:.3g} m/s, limit {MAX_RELATIVE_SPEED:g}); try a smaller "
-                    f"time step (e.g. {dt / 4:.3g} s), a coarser resolution or a less stiff fabric")
-            self._query(x, xp, step)
+        self._update(x, xp, dt, state.t)
         xp = x if xp is None else xp
         total = 0
         if len(self._tri):
@@ -402,6 +364,26 @@ class SelfCollider:
             self.stats["contacts"] += total
         self._x_prev = x.copy()
         return total
+
+    def _update(self, x, xp, dt, t) -> None:
+        """The candidates for the step from ``xp`` to ``x``: found again for the vertices that moved
+        ``margin / 2`` from their anchors (relative to the centroid), all of them when most did."""
+        rx = x - x.mean(axis=0)
+        rxp = None if xp is None else xp - xp.mean(axis=0)
+        drift = self._drift(rx, rxp)
+        if drift is not None and drift.max(initial=0.0) < (0.5 * self.margin) ** 2:
+            return
+        # found again with those that moved half as far: they would be next
+        moving = None if drift is None else drift >= (REANCHOR * 0.5 * self.margin) ** 2
+        step = math.inf if rxp is None else float(np.sqrt(np.einsum("ij,ij->i", rx - rxp, rx - rxp).max()))
+        if rxp is not None and step > MAX_RELATIVE_SPEED * dt:
+            raise SimulationUnstable(
+                f"simulation unstable at t = {t:.4f} s (Δt = {dt:.3g} s): part of the cloth moved {step:.3g} m "
+                f"relative to the rest in one step ({step / dt:.3g} m/s, limit {MAX_RELATIVE_SPEED:g}); try a smaller "
+                f"time step (e.g. {dt / 4:.3g} s), a coarser resolution or a less stiff fabric")
+        if moving is not None and moving.mean() > PARTIAL_SHARE:
+            moving = None
+        self._query(rx, rxp, step, moving)
 
     def _resolve_at(self, x, xp, v, im, dt, keys, rounds, sweeps):
         """Detect and resolve contacts at ``x`` (side memory ``xp``) until nothing new; returns the contact keys."""
@@ -449,5 +431,5 @@ class SelfCollider:
         s["mode"] = self.mode
         s["query_s"] = round(s["query_s"], 3)
         s["response_s"] = round(s["response_s"], 3)
-        s["patches"] = self.patch_count
+        s["patches"] = self.regions.count
         return s

@@ -235,8 +235,9 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
 
 
 @njit(cache=True)
-def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r):
-    """Count (``fill`` False) or write the edges after active edge ``q`` within ``r`` of it, sharing no end."""
+def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin, cell, dims, r):
+    """Count (``fill`` False) or write the edges within ``r`` of edge ``q``, sharing no end: every
+    clean one, and the dirty ones after it (each dirty pair once)."""
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     r2 = r * r
@@ -247,7 +248,7 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                 key = a + dims[0] * (b + dims[1] * c)
                 for m in range(ptr[key], ptr[key + 1]):
                     s = items[m]
-                    if s <= q:
+                    if s == q or (dirty[s] and s < q):
                         continue
                     b0, b1 = edges[ids[s], 0], edges[ids[s], 1]
                     if a0 == b0 or a0 == b1 or a1 == b0 or a1 == b1:
@@ -270,34 +271,37 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs(ids, edges, e_lo, e_hi, origin, cell, dims, r, ring_ptr, ring_idx):
+def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
-    counts = np.zeros(len(ids), np.int64)
+    counts = np.zeros(len(queries), np.int64)
     dummy = np.zeros((0, 4), np.int64)
     no = np.zeros(0, np.bool_)
-    for q in prange(len(ids)):
-        counts[q] = _ee_one(q, False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell, dims, r)
-    starts = np.zeros(len(ids) + 1, np.int64)
+    for k in prange(len(queries)):
+        counts[k] = _ee_one(queries[k], False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
+                            cell, dims, r)
+    starts = np.zeros(len(queries) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out = np.empty((starts[-1], 4), np.int64)
     out_near = np.empty(starts[-1], np.bool_)
-    for q in prange(len(ids)):
-        _ee_one(q, True, out, out_near, starts[q], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, ptr, items, origin, cell,
-                dims, r)
+    for k in prange(len(queries)):
+        _ee_one(queries[k], True, out, out_near, starts[k], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
+                cell, dims, r)
     return out, out_near
 
 
-def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring):
+def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
     share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
     pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
-    :func:`vertex_triangle_pairs`)."""
+    :func:`vertex_triangle_pairs`). With ``dirty`` ((len(ids),) bool), only the pairs with at least
+    one dirty edge (the others are known from an earlier query)."""
     ids = np.ascontiguousarray(ids, np.int64)
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
+    dirty = np.ones(len(ids), np.bool_) if dirty is None else np.ascontiguousarray(dirty, np.bool_)
     ends = edges[ids]
     e_lo = np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]]))
     e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
     grid = Grid(e_lo - radius, e_hi + radius, cell)
-    return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, grid.origin, grid.cell, grid.dims,
-                     float(radius), *ring)
+    return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
+                     grid.origin, grid.cell, grid.dims, float(radius), *ring)
