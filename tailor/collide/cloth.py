@@ -54,7 +54,7 @@ import numpy as np
 
 from ..errors import SimulationUnstable
 from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
-                            touching, unique_ints)
+                            touching, touching_vt, unique_ints)
 from .grid import edge_edge_pairs, overlapping_boxes, vertex_rings, vertex_triangle_pairs
 from .layers import Layers
 from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
@@ -393,13 +393,9 @@ class SelfCollider:
         weight = np.array([self.n ** 3, self.n ** 2, self.n, 1], np.int64)
         lists = []
         seen = np.zeros(0, np.int64)
+        vt_sel, ee_sel = np.arange(len(self._tri)), np.arange(len(self._ee))
         for _ in range(rounds):  # detect, resolve all contacts so far, detect again until nothing new
-            vt, ee = (detect_vt, detect_ee) if m >= PARALLEL_PAIRS else (detect_vt_serial, detect_ee_serial)
-            vt(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self._tri_side, self.thickness,
-               self.thickness + self._reach, ci, ca, cn, ch, hit)
-            if self.edges:
-                ee(x, xp, v, dt, self._ee, self._ee_near, self._ee_toward, self.thickness, self.thickness + self._reach,
-                   ci, ca, cn, ch, hit, len(self._tri))
+            self._detect(x, xp, v, dt, ci, ca, cn, ch, hit, vt_sel, ee_sel)
             found = np.flatnonzero(hit)
             key = np.sort(ci[found], axis=1) @ weight
             edge = found >= len(self._tri)
@@ -412,7 +408,22 @@ class SelfCollider:
             lists.append((ci[new], ca[new], cn[new], ch[new]))
             all_i, all_a, all_n, all_h = (np.concatenate(c) for c in zip(*lists))
             resolve_contacts(x, v, im, all_i, all_a, all_n, all_h, dt, self.friction, sweeps)
+            # only pairs with a vertex the response moved can have changed
+            changed = np.zeros(self.n, bool)
+            changed[all_i.ravel()] = True
+            vt_sel = np.flatnonzero(touching_vt(self._vtx, self._tri, self.faces, changed))
+            ee_sel = np.flatnonzero(touching(self._ee, changed))
         return np.union1d(keys, seen)
+
+    def _detect(self, x, xp, v, dt, ci, ca, cn, ch, hit, vt_sel, ee_sel) -> None:
+        """The candidates ``vt_sel`` and ``ee_sel`` judged at ``x`` (the others keep their last verdict)."""
+        parallel = len(vt_sel) + len(ee_sel) >= PARALLEL_PAIRS
+        vt, ee = (detect_vt, detect_ee) if parallel else (detect_vt_serial, detect_ee_serial)
+        vt(x, xp, v, dt, self.faces, self._vtx, self._tri, self._tri_near, self._tri_side, self.thickness,
+           self.thickness + self._reach, ci, ca, cn, ch, hit, vt_sel)
+        if self.edges:
+            ee(x, xp, v, dt, self._ee, self._ee_near, self._ee_toward, self.thickness, self.thickness + self._reach,
+               ci, ca, cn, ch, hit, len(self._tri), ee_sel)
 
     def moved(self, x) -> None:
         """Positions were changed between steps (untangled): they are the sides to keep from now on,

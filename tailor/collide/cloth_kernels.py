@@ -16,7 +16,7 @@ from numba import njit, prange
 from .broad import run_starts
 
 __all__ = ["detect_vt", "detect_vt_serial", "detect_ee", "detect_ee_serial", "pair_motion", "resolve_contacts",
-           "unique_ints", "touching", "NEAR_THICKNESS", "PARALLEL_PAIRS"]
+           "unique_ints", "touching", "touching_vt", "NEAR_THICKNESS", "PARALLEL_PAIRS"]
 
 NEAR_THICKNESS = 0.25
 """Fraction of the thickness kept between a vertex and a triangle of its 1-ring (or two edges whose
@@ -148,18 +148,18 @@ def _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, 
 
 
 @njit(cache=True, parallel=True)
-def detect_vt(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit):
-    """Every vertex–triangle candidate through :func:`_vt_pair`, in parallel (one slot each: the result
-    does not depend on the thread count)."""
-    for k in prange(len(tri)):
-        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit)
+def detect_vt(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit, sel):
+    """The vertex–triangle candidates ``sel`` through :func:`_vt_pair`, in parallel (one slot each: the
+    result does not depend on the thread count)."""
+    for j in prange(len(sel)):
+        _vt_pair(sel[j], x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit)
 
 
 @njit(cache=True)
-def detect_vt_serial(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit):
+def detect_vt_serial(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit, sel):
     """:func:`detect_vt` on one thread: a few hundred candidates are not worth waking the others."""
-    for k in range(len(tri)):
-        _vt_pair(k, x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit)
+    for j in range(len(sel)):
+        _vt_pair(sel[j], x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit)
 
 
 @njit(cache=True, inline="always")
@@ -220,17 +220,32 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, ou
 
 
 @njit(cache=True, parallel=True)
-def detect_ee(x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
-    """Every edge–edge candidate through :func:`_ee_pair`, in parallel (one slot each)."""
-    for k in prange(len(pairs)):
-        _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
+def detect_ee(x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset, sel):
+    """The edge–edge candidates ``sel`` through :func:`_ee_pair`, in parallel (one slot each)."""
+    for j in prange(len(sel)):
+        _ee_pair(sel[j], x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
 
 
 @njit(cache=True)
-def detect_ee_serial(x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset):
+def detect_ee_serial(x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset, sel):
     """:func:`detect_ee` on one thread."""
-    for k in range(len(pairs)):
-        _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
+    for j in range(len(sel)):
+        _ee_pair(sel[j], x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, out_a, out_n, out_h, hit, offset)
+
+
+@njit(cache=True, parallel=True)
+def _touching_vt(vtx, tri, faces, mask, out):
+    for k in prange(len(tri)):
+        f = faces[tri[k]]
+        out[k] = mask[vtx[k]] or mask[f[0]] or mask[f[1]] or mask[f[2]]
+
+
+def touching_vt(vtx, tri, faces, mask):
+    """(K,) bool: whether each vertex–triangle pair (``vtx``, ``tri``) has a vertex of ``mask``."""
+    out = np.empty(len(tri), np.bool_)
+    if len(tri):
+        _touching_vt(vtx, tri, faces, np.ascontiguousarray(mask, np.bool_), out)
+    return out
 
 
 @njit(cache=True)
