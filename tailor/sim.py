@@ -48,6 +48,10 @@ class Quality:
     step_per_resolution: float
     tolerance: float
 
+    def garment_step(self, resolution: float) -> float:
+        """The largest step [s] on a garment meshed at ``resolution`` [m]."""
+        return min(self.step, self.step_per_resolution * resolution)
+
 
 QUALITY = {
     "draft": Quality("draft", 0.04, 1.0, 1e-2),

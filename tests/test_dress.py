@@ -93,6 +93,20 @@ def test_settling_ends_once_the_garment_is_at_rest(mannequin):
     assert rms_speed(d.garment.model, state) == pytest.approx(np.sqrt(2 * kinetic / m.sum()))
 
 
+def test_every_preset_settles_to_the_same_rest_and_final_gets_there_still(mannequin):
+    """Settling is quasi-static: its end is a static equilibrium, the same whatever the step, so
+    every preset settles at the coarse step. `final` then dresses the same garment as `draft`,
+    at rest, instead of still swinging after its whole settling time."""
+    pattern = read_pattern(PANELS / "tshirt.json")
+    ends = []
+    for quality in ("draft", "final"):
+        d, _, x0 = prepare(pattern, mannequin, DrapeOptions(resolution=0.04, frames=1, settle=1.0, quality=quality))
+        state, report = settle(d, sew(d, x0)[0])
+        assert report.frames < d.options.fps and rms_speed(d.garment.model, state) < REST_SPEED
+        ends.append(state.x)
+    assert np.linalg.norm(ends[0] - ends[1], axis=1).max() < 1e-3
+
+
 def test_transition_and_motion_alone_on_a_still_body(skirt_dressing, settled):
     pattern, (d, _, _) = skirt_dressing
     state, report = transition(d, settled[1][0])

@@ -27,7 +27,7 @@ from ..placement import place_panels
 from ..sim import quality as sim_quality
 from ..sizing import check_loops
 from .garment import Garment
-from .options import DRAPE_RESOLUTION, DrapeOptions
+from .options import DRAPE_RESOLUTION, SETTLE_QUALITY, DrapeOptions
 from .phases import Dressing, animate, settle, sew, transition
 from .report import DrapeProgress, DrapeReport, DrapeResult, PhaseReport
 from .timeline import Timeline
@@ -108,7 +108,8 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     q = sim_quality(opts.quality)
     # implicit steps shrink with the mesh: body contact is resolved once a step, so a vertex must
     # not move far compared with its triangles (docs/measurements.md)
-    timeline = Timeline(body, None if integ.explicit else min(q.step, q.step_per_resolution * opts.resolution))
+    still = None if integ.explicit else q.garment_step(opts.resolution)
+    timeline = Timeline(body, still, settle_step=None if integ.explicit else max(still, SETTLE_QUALITY.garment_step(opts.resolution)))
     landmarks = measure_body(body, timeline.pose)
     loops = check_loops(pattern, landmarks)  # a loop too small for the body fails now, not at the sewing time-out
     placer = Placer(pattern, mesh, landmarks, InsideTest(timeline.pose, body.faces))

@@ -18,7 +18,7 @@ from ..integrators import INTEGRATORS
 from ..sim import DEFAULT_QUALITY, QUALITY
 from ..tearing import Cut
 
-__all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
+__all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
            "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER"]
 
@@ -129,6 +129,11 @@ class PhaseSettings:
         The guard's stretch limit; None: ``MOTION_MAX_STRETCH`` or growth over the dressed garment.
     moving : bool
         Steps follow the near-body speed rule of the timeline (the body moves).
+    quasi_static : bool
+        Only the phase's end state matters, a static equilibrium (settling): it is stepped at
+        :data:`SETTLE_QUALITY`'s step and tolerance in every preset. Backward Euler's fixed point,
+        v = 0 where the forces balance, is the same at any step; smaller steps only damp the way
+        there less (docs/measurements.md, eleventh day).
     """
 
     name: str
@@ -139,6 +144,7 @@ class PhaseSettings:
     wind: bool
     max_stretch: float | None
     moving: bool
+    quasi_static: bool = False
 
 
 SEWING = PhaseSettings(
@@ -155,8 +161,10 @@ SEWING = PhaseSettings(
     max_stretch_change=math.inf, wind=False,
     # a corner pulled three ways may stretch its triangles this far before merging
     max_stretch=10.0, moving=False)
-SETTLING = PhaseSettings("settling", gravity=True, contact=ContactSettings(), tolerance=None, max_stretch_change=0.3,
-                         wind=True, max_stretch=SEWING.max_stretch, moving=False)
+SETTLE_QUALITY = QUALITY["draft"]
+"""The preset whose step and tolerance every preset settles at (``PhaseSettings.quasi_static``)."""
+SETTLING = PhaseSettings("settling", gravity=True, contact=ContactSettings(), tolerance=SETTLE_QUALITY.tolerance,
+                         max_stretch_change=0.3, wind=True, max_stretch=SEWING.max_stretch, moving=False, quasi_static=True)
 TRANSITION = PhaseSettings("transition", gravity=True, contact=ContactSettings(), tolerance=None, max_stretch_change=0.3,
                            wind=True, max_stretch=None, moving=True)
 MOTION = PhaseSettings("motion", gravity=True, contact=ContactSettings(), tolerance=None, max_stretch_change=0.3,

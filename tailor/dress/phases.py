@@ -93,7 +93,9 @@ class Dressing:
         if self.phase.moving:
             dt = self.timeline.moving_step(state, duration)
         else:
-            dt = self.timeline.still_step if self.phase.gravity else None  # sewing: the plain implicit step
+            dt = None  # sewing: the plain implicit step
+            if self.phase.gravity:
+                dt = self.timeline.settle_step if self.phase.quasi_static else self.timeline.still_step
         state = self.stepper.advance(self.garment.model, state, duration, dt)
         if rescue:
             self.contacts.rescue(self.garment.model, state)

@@ -83,9 +83,12 @@ class Timeline:
     body : Body
     still_step : float or None
         The implicit step [s] while the body is still (None: explicit integrators keep Eq. 24's).
+    settle_step : float or None
+        The implicit step [s] of a quasi-static phase (settling: only its end state matters);
+        default ``still_step``.
     """
 
-    def __init__(self, body, still_step: float | None):
+    def __init__(self, body, still_step: float | None, *, settle_step: float | None = None):
         self.body = body
         self.moving = body.frame_count > 1
         has_rest = self.moving and body.rest is not None
@@ -96,6 +99,7 @@ class Timeline:
         self.transition_start = None  # [s] of the drape's clock, set when the body starts to move
         self.motion_start = None
         self.still_step = still_step
+        self.settle_step = still_step if settle_step is None else settle_step
         self.steps_used: list = []
         self._near = None
         self.margin = 0.0
