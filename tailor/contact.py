@@ -19,6 +19,7 @@ from typing import Protocol
 import numpy as np
 
 from .collide import SELF_COLLISION_MODES, SELF_MARGIN, BodyCollider, Contacts, Layers, SelfCollider, untangle
+from .collide.cloth import PARTIAL_SHARE
 from .collide.untangle import vertex_rings
 from .errors import SimulationError
 
@@ -355,7 +356,8 @@ class ContactPipeline:
                 layers = Layers.round_body(self.panel_layer[model.face_panel], model.face_panel, x, model.faces, body_x,
                                            self.body.faces)
             self._self = SelfCollider(model.faces, model.face_panel, x, thickness=self.thickness, margin=self.self_margin,
-                                      mode=self.self_mode, friction=friction, layers=layers)
+                                      mode=self.self_mode, friction=friction, layers=layers,
+                                      partial=PARTIAL_SHARE if self.panel_layer is not None else 0.0)
             if stats is not None:
                 self._self.carry_stats(stats)
             self._self_key = key

@@ -386,12 +386,13 @@ def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near
     """A strip swinging over a still panel: the still panel keeps its candidates (partial queries
     find again only the pairs touching vertices that moved from their anchors), and after every
     step each vertex–triangle pair within the thickness is among them."""
+    from tailor.collide.cloth import PARTIAL_SHARE
     from tailor.collide.cloth_kernels import unique_ints
     from tailor.collide.grid import vertex_triangle_pairs
 
     model, x0 = stacked(0.004, 0.0, offset=0.0, size=0.2, resolution=0.02)
     upper = panel_vertices(model, 1)
-    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on", partial=PARTIAL_SHARE)
     state = model.state(x0.copy(), np.zeros_like(x0))
     inv_mass = 1.0 / np.asarray(model.vertex_mass)
     rng = np.random.default_rng(2)

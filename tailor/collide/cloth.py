@@ -12,8 +12,8 @@ threshold distance from the cloth's vertices") runs in three stages:
    (:mod:`tailor.collide.grid`: python-fcl can neither refit nor hand back pairs without a Python
    object each). Each vertex is anchored where it was last queried; a pair stays valid while
    neither end moves ``margin / 2`` from its anchor (two points then approach by less than
-   ``margin``). When some vertices have, only the pairs touching them are found again (the others'
-   anchors are their boxes); when most have, all are. Swept boxes are tight
+   ``margin``). A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices
+   that have (the others' anchors are their boxes), unless most have. Swept boxes are tight
    for cloth falling or swinging as a whole, where one radius for every pair (``margin`` plus
    twice the step's largest displacement relative to the centroid) grows with the fastest part
    of the cloth and pairs everything with everything (docs/measurements.md has the numbers).
@@ -68,8 +68,8 @@ MAX_SUBSTEPS = 16
 """At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
 
 PARTIAL_SHARE = 0.5
-"""When more of the vertices than this have moved from their anchors, every candidate is found
-again; fewer, only the pairs touching them."""
+"""A ``partial`` collider's share: when more of the vertices than this have moved from their anchors,
+every candidate is found again; fewer, only the pairs touching them."""
 
 REANCHOR = 0.5
 """A partial query also anchors again the vertices this far through their ``margin / 2``."""
@@ -118,10 +118,15 @@ class SelfCollider:
         Also check edge–edge pairs (:func:`detect_ee`); off, only vertex–triangle pairs.
     layers : Layers, optional
         An outfit's garments: contacts between them keep their order (:class:`Layers`).
+    partial : float
+        Share of the vertices up to which, when they have moved from their anchors, only the pairs
+        touching them are found again (:data:`PARTIAL_SHARE`; 0: all, always). It pays where part
+        of the cloth lies still while the rest moves (an outfit's sewn garment while the next sews).
     """
 
     def __init__(self, faces, face_group, x, *, thickness: float, margin: float = SELF_MARGIN, mode: str = "auto",
-                 patch: float | None = None, friction: float = 0.4, edges: bool = True, layers: Layers | None = None):
+                 patch: float | None = None, friction: float = 0.4, edges: bool = True, layers: Layers | None = None,
+                 partial: float = 0.0):
         if mode not in ("auto", "on"):
             raise ValueError(f"self-collision mode must be 'auto' or 'on', got {mode!r}")
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
@@ -132,6 +137,7 @@ class SelfCollider:
         self.edges = bool(edges)
         self.mode = mode
         self.layers = layers
+        self.partial = float(partial)
         self._vertex_layer = layers.vertex_layer(self.faces, self.n) if layers is not None else None
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         self._ring_csr = vertex_rings(self.faces, self.n)  # each vertex's neighbours across an edge
@@ -381,7 +387,7 @@ class SelfCollider:
                 f"simulation unstable at t = {t:.4f} s (Δt = {dt:.3g} s): part of the cloth moved {step:.3g} m "
                 f"relative to the rest in one step ({step / dt:.3g} m/s, limit {MAX_RELATIVE_SPEED:g}); try a smaller "
                 f"time step (e.g. {dt / 4:.3g} s), a coarser resolution or a less stiff fabric")
-        if moving is not None and moving.mean() > PARTIAL_SHARE:
+        if moving is not None and moving.mean() > self.partial:
             moving = None
         self._query(rx, rxp, step, moving)
 
