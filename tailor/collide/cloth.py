@@ -55,7 +55,7 @@ import numpy as np
 from ..errors import SimulationUnstable
 from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
                             touching, touching_vt, unique_ints)
-from .grid import edge_edge_pairs, overlapping_boxes, vertex_rings, vertex_triangle_pairs
+from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .layers import Layers
 from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
 
@@ -250,7 +250,7 @@ class SelfCollider:
         vertex, tri, near, ee, ee_near = self._drop_ignored(vertex, tri, near, ee, ee_near)
         tri_side = self._tri_sides(vertex, tri)
         if dirty is not None:  # the kept candidates: no end moved
-            keep = ~(dirty[self._vtx] | touching(self.faces[self._tri], dirty))
+            keep = ~touching_vt(self._vtx, self._tri, self.faces, dirty)
             vertex, tri, near, tri_side = (np.concatenate([a[keep], b]) for a, b in
                                            ((self._vtx, vertex), (self._tri, tri), (self._tri_near, near), (self._tri_side, tri_side)))
             keep = ~touching(self._ee, dirty)
