@@ -108,8 +108,11 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     q = sim_quality(opts.quality)
     # implicit steps shrink with the mesh: body contact is resolved once a step, so a vertex must
     # not move far compared with its triangles (docs/measurements.md)
-    still = None if integ.explicit else q.garment_step(opts.resolution)
-    timeline = Timeline(body, still, settle_step=None if integ.explicit else max(still, SETTLE_QUALITY.garment_step(opts.resolution)))
+    still = settle = None  # explicit integrators keep Eq. 24's step
+    if not integ.explicit:
+        still = q.garment_step(opts.resolution)
+        settle = max(still, SETTLE_QUALITY.garment_step(opts.resolution))  # quasi-static: the coarse step
+    timeline = Timeline(body, still, settle_step=settle)
     landmarks = measure_body(body, timeline.pose)
     loops = check_loops(pattern, landmarks)  # a loop too small for the body fails now, not at the sewing time-out
     placer = Placer(pattern, mesh, landmarks, InsideTest(timeline.pose, body.faces))
