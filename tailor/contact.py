@@ -246,6 +246,7 @@ class ContactPipeline:
         self._self_key = None
         self._rings = None  # (numbering, each vertex's neighbours) for untangling
         self._waiting = None  # (N,) bool: an outfit's garments waiting outside to sew, out of the self-collision
+        self._start = None  # (N, 3) where the next step starts after a renumbering (follow), for the self-collider
 
     def configure(self, settings: ContactSettings) -> None:
         """What contact does from now on (a new phase)."""
@@ -261,10 +262,20 @@ class ContactPipeline:
         placed afresh, clear of it, before they sew)."""
         self._waiting = None if waiting is None or not np.any(waiting) else np.asarray(waiting, bool)
 
-    def follow(self, friction) -> None:
-        """The cloth's vertices were welded (their count changed; the colliders notice by it):
-        the friction per new vertex."""
+    def follow(self, friction, x=None) -> None:
+        """The cloth's vertices were welded or moved between steps (their count changed; the colliders
+        notice by it): the friction per new vertex, and ``x``, where the next step starts from in the
+        new numbering: the self-collider built for it keeps the cloth on the sides it has there, as
+        the one it replaces kept them step to step (otherwise a crossing the first step after a weld
+        makes would be taken as a side to keep)."""
         self.friction = friction
+        self._start = None if x is None else np.array(x, float)
+
+    def _restart(self, x) -> None:
+        """Positions moved in place between steps: the next step starts from ``x`` if it is to
+        start a new self-collider (:meth:`follow`)."""
+        if self._start is not None and len(self._start) == len(x):
+            self._start = np.array(x, float)
 
     def forget(self) -> None:
         """The cloth's topology changed (a cut or a tear): drop everything known per vertex."""
@@ -348,6 +359,9 @@ class ContactPipeline:
         outfit's layers, the body at ``body_x``) when it changed."""
         layered = self.panel_layer is not None and body_x is not None and self.settings.layers
         key = (model.vertex_count, self._version, layered)
+        start = self._start
+        if self._self is not None and self._self_key[:2] == key[:2]:  # same numbering, new settings
+            start = self._self.previous
         if self._self is None or self._self_key != key:
             stats = self._self.stats if self._self is not None else None
             friction = float(np.mean(self.friction * self.settings.friction_scale))
@@ -357,11 +371,23 @@ class ContactPipeline:
                                            self.body.faces)
             self._self = SelfCollider(model.faces, model.face_panel, x, thickness=self.thickness, margin=self.self_margin,
                                       mode=self.self_mode, friction=friction, layers=layers,
-                                      partial=PARTIAL_SHARE if self.panel_layer is not None else 0.0)
+                                      partial=PARTIAL_SHARE if self.panel_layer is not None else 0.0,
+                                      garment=self._vertex_garment(model))
             if stats is not None:
                 self._self.carry_stats(stats)
+            if start is not None and len(start) == model.vertex_count:
+                self._self.moved(start)
             self._self_key = key
+        self._start = None
         return self._self
+
+    def _vertex_garment(self, model):
+        """(N,) an outfit's garment of each vertex of ``model`` (None for one garment)."""
+        if self.panel_layer is None:
+            return None
+        out = np.zeros(model.vertex_count, np.int64)
+        out[model.faces] = self.panel_layer[model.face_panel][:, None]
+        return out
 
     def untangle(self, model, state) -> tuple:
         """The cloth's edges through its own triangles pushed apart in place (:func:`~tailor.collide.untangle`),
@@ -376,6 +402,7 @@ class ContactPipeline:
         if found:
             if self._self is not None and self._self_key[:2] == key:
                 self._self.moved(state.x)
+            self._restart(state.x)
             self.rescue(model, state)
         return found, left
 
@@ -385,6 +412,8 @@ class ContactPipeline:
             return 0
         bx, bv, k = self.motion.at(state.t)
         moved = self.body.rescue(model, state, bx, bv, k, thickness=self.thickness)
+        if moved:
+            self._restart(state.x)
         self.rescued += moved
         return moved
 

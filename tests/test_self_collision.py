@@ -411,3 +411,44 @@ def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near
         assert set(zip(near_v.tolist(), near_t.tolist())) <= held, step
         near_pairs += len(near_v)
     assert collider.stats["partial_queries"] > 0 and near_pairs > 0
+
+
+@pytest.mark.parametrize("told", [True, False])
+def test_a_self_collider_rebuilt_after_a_weld_keeps_the_sides_the_cloth_had_before_the_step(told):
+    """After welding (a new numbering) the self-collider is built afresh. Told where the step starts
+    (``follow(friction, x)``), it keeps the upper panel above the lower one through a step that
+    carries it through; not told, it can only take the crossed end of the step as the sides to keep
+    (what every first step after a weld did)."""
+    from tailor.contact import ContactPipeline
+
+    model, x0 = stacked(0.01, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    contacts = ContactPipeline(None, None, thickness=0.003, friction=0.3, self_collision="on")
+    contacts.follow(0.3, x0 if told else None)
+    x1, v = x0.copy(), np.zeros_like(x0)
+    x1[upper, 2] -= 0.015  # 5 mm below the lower panel at the end of the step
+    v[upper, 2] = -1.5
+    state = model.state(x1, v)
+    contacts.respond(model, state, 0.01)
+    above = state.x[upper, 2].mean() > state.x[~upper, 2].mean()
+    assert above == told
+
+
+@pytest.mark.parametrize("outfit", [True, False])
+def test_an_open_seam_passes_through_its_own_garment_but_not_through_another(outfit):
+    """While sewing, the vertices of open seams are left free (:meth:`SelfCollider.ignore`) so that
+    a seam's two sides meet; in an outfit they still meet the other garments (a skirt's band
+    closing over the trousers' must not be drawn through them)."""
+    model, x0 = stacked(0.01, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    garment = upper.astype(np.int64) if outfit else np.zeros(model.vertex_count, np.int64)
+    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on", garment=garment)
+    inv_mass = 1.0 / np.asarray(model.vertex_mass)
+    collider.respond(inv_mass, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
+    collider.ignore(upper)  # the upper panel's seams are open
+    x1, v = x0.copy(), np.zeros_like(x0)
+    x1[upper, 2] -= 0.015
+    v[upper, 2] = -1.5
+    state = model.state(x1, v)
+    collider.respond(inv_mass, state, 0.01)
+    assert (state.x[upper, 2].mean() > state.x[~upper, 2].mean()) == outfit

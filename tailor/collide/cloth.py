@@ -122,11 +122,14 @@ class SelfCollider:
         Share of the vertices up to which, when they have moved from their anchors, only the pairs
         touching them are found again (:data:`PARTIAL_SHARE`; 0: all, always). It pays where part
         of the cloth lies still while the rest moves (an outfit's sewn garment while the next sews).
+    garment : (N,) int, optional
+        An outfit's garment of each vertex: the open seams :meth:`ignore` leaves free pass only
+        through their own garment, never through another (a skirt's band closing over trousers').
     """
 
     def __init__(self, faces, face_group, x, *, thickness: float, margin: float = SELF_MARGIN, mode: str = "auto",
                  patch: float | None = None, friction: float = 0.4, edges: bool = True, layers: Layers | None = None,
-                 partial: float = 0.0):
+                 partial: float = 0.0, garment=None):
         if mode not in ("auto", "on"):
             raise ValueError(f"self-collision mode must be 'auto' or 'on', got {mode!r}")
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
@@ -139,6 +142,7 @@ class SelfCollider:
         self.layers = layers
         self.partial = float(partial)
         self._vertex_layer = layers.vertex_layer(self.faces, self.n) if layers is not None else None
+        self._garment = None if garment is None else np.asarray(garment, np.int64)
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         self._ring_csr = vertex_rings(self.faces, self.n)  # each vertex's neighbours across an edge
         # undirected edges and each face's edges, for edge–edge pairs
@@ -283,7 +287,8 @@ class SelfCollider:
         """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact, as a
         vertex, a triangle's corner or an edge's end, except between the vertex pairs ``keep`` ((K, 2)):
         the open seams while sewing, whose two sides must be free to meet edge to edge, while the
-        neighbourhoods of a seam's two sides still keep out of each other."""
+        neighbourhoods of a seam's two sides still keep out of each other. Pairs between two
+        garments of an outfit (``garment``) keep contact too."""
         mask = None if vertices is None or not np.any(vertices) else np.asarray(vertices, bool)
         keys = None
         if mask is not None and keep is not None and len(keep):
@@ -316,11 +321,15 @@ class SelfCollider:
         keep = ~(self._ignored[vertex] | touching(corners, self._ignored))
         touched = np.flatnonzero(~keep)  # only these can be saved by a kept pair
         keep[touched] = self._is_kept(vertex[touched, None], corners[touched]).any(axis=1)
+        if self._garment is not None:
+            keep |= self._garment[vertex] != self._garment[corners[:, 0]]
         if len(ee):
             keep_ee = ~touching(ee, self._ignored)
             touched = np.flatnonzero(~keep_ee)
             a, b = ee[touched, :2], ee[touched, 2:]
             keep_ee[touched] = self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), 4).any(axis=1)
+            if self._garment is not None:
+                keep_ee |= self._garment[ee[:, 0]] != self._garment[ee[:, 2]]
             ee, ee_near = ee[keep_ee], ee_near[keep_ee]
         return vertex[keep], tri[keep], near[keep], ee, ee_near
 
@@ -430,6 +439,11 @@ class SelfCollider:
         if self.edges:
             ee(x, xp, v, dt, self._ee, self._ee_near, self._ee_toward, self.thickness, self.thickness + self._reach,
                ci, ca, cn, ch, hit, len(self._tri), ee_sel)
+
+    @property
+    def previous(self):
+        """(N, 3) the positions the last response ended at (None before the first)."""
+        return self._x_prev
 
     def moved(self, x) -> None:
         """Positions were changed between steps (untangled): they are the sides to keep from now on,

@@ -118,7 +118,7 @@ class Dressing:
     def weld(self, state):
         """The merged pairs welded; contacts follow the new numbering; trapped vertices freed."""
         state = self.garment.rebuild(state)
-        self.contacts.follow(self.garment.friction)
+        self.contacts.follow(self.garment.friction, state.x)
         self.constrain()
         self.contacts.rescue(self.garment.model, state)
         self.contacts.untangle(self.garment.model, state)  # a merge can fold a seam corner through its neighbour
@@ -131,7 +131,7 @@ class Dressing:
             return state
         if self.attachments is not None:
             self.attachments = self.attachments.renumbered(inverse)
-        self.contacts.follow(self.garment.friction)
+        self.contacts.follow(self.garment.friction, state.x)
         self.contacts.forget()
         self.constrain()
         self.integrator.reset()
@@ -179,7 +179,7 @@ def sew(d: Dressing, x0):
             if stage.dresses and stage.garment:
                 state = _dress_over(d, state, stage.garment)
             sewing.merge_distance = merge_distance
-            d.contacts.follow(g.friction)
+            d.contacts.follow(g.friction, state.x)
             d.constrain()
         t, unwelded = 0.0, 0  # pairs merged since the last weld (held by their seam springs meanwhile)
         sewing.route_around(None)
@@ -252,7 +252,7 @@ def settle(d: Dressing, state):
     t0 = time.perf_counter()
     state, d.attachments = d.garment.attach(state, d.contacts.body, d.timeline.pose)
     d.held_heights = None
-    d.contacts.follow(d.garment.friction)
+    d.contacts.follow(d.garment.friction, state.x)
     d.constrain()
     d.enter(SETTLING)
     count, still, done = int(round(d.options.settle * d.options.fps)), 0, 0
