@@ -14,6 +14,9 @@ handles one garment:
   their clearance plus :data:`~tailor.placement.LAYER_GAP` (:class:`~tailor.pattern.Piece`
   ``clearance``), and :func:`tailor.placement.place_panels` rolls any row that would start behind
   the cloth already placed further out.
+* **Room for the layers inside** (:func:`ease_layers`): a loop of an outer garment round a
+  landmark where an inner garment has one too (a skirt's waist over trousers' waistband) is widened
+  until it keeps its own ease over the inner loop, one layer spacing out.
 * **Sewing** in stages, innermost garment first, the outer ones waiting where they were placed
   (:meth:`tailor.dress.garment.Garment.sew_stage`); at its stage each is placed afresh, at its own
   clearance, over the sewn garments inside it (``place_panels(..., garment=k)``). Each panel keeps
@@ -35,7 +38,7 @@ from .errors import PatternError
 from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSide, validate_pattern
 from .placement import LAYER_GAP
 
-__all__ = ["outfit", "garment_of_vertex", "out_of_order"]
+__all__ = ["outfit", "ease_layers", "garment_of_vertex", "out_of_order"]
 
 def outfit(patterns, *, name: str | None = None) -> Pattern:
     """One pattern dressing ``patterns`` together, innermost first (see the module).
@@ -67,6 +70,56 @@ def outfit(patterns, *, name: str | None = None) -> Pattern:
                        attachments=tuple(attachments), fabric=first.fabric,
                        source=" + ".join(patterns[i].source for i in order), pieces=tuple(pieces))
     return validate_pattern(combined)
+
+
+def ease_layers(pattern: Pattern, landmarks, spacing: float) -> Pattern:
+    """``pattern`` (an outfit) with each outer garment's loops widened where they go over an inner one's.
+
+    A pattern is drafted for the bare body: a loop of length L round a girth G has the ease L − G.
+    Worn over an inner garment's loop of length L_in at the same landmark, it must go round that
+    loop one layer ``spacing`` [m] further out and keep its own ease there:
+
+        L' = max(L, L_in + 2π·spacing + max(L − G, 0)),
+
+    so the loop's panels are scaled across by L'/L (``Piece.ease``: the largest factor of a garment).
+    Without it a skirt's waistband (88 cm on an 84 cm waist) must close over trousers' band of the
+    same length and is pulled through it or torn apart by the squeeze (docs/outfits.md). ``landmarks``
+    are the body's (:func:`tailor.measure.measure_body`); a loop round a landmark the body lacks is left.
+    """
+    import math
+
+    from .sizing import loop_girth, pattern_loops, scaled_panel
+
+    if len(pattern.pieces) < 2:
+        return pattern
+    outermost: dict = {}  # landmark → length of the outermost loop round it so far
+    scales: dict = {}  # panel name → factor across
+    pieces = []
+    for piece in pattern.pieces:
+        factor = 1.0
+        for loop in pattern_loops(_garment(pattern, piece)):
+            girth = loop_girth(landmarks, loop.landmark)
+            inner = outermost.get(loop.landmark)
+            length = loop.length
+            if inner is not None and girth is not None:
+                length = max(length, inner + 2.0 * math.pi * spacing + max(loop.length - girth, 0.0))
+                for name in loop.panels:
+                    scales[name] = max(scales.get(name, 1.0), length / loop.length)
+                factor = max(factor, length / loop.length)
+            outermost[loop.landmark] = max(outermost.get(loop.landmark, 0.0), length)
+        pieces.append(replace(piece, ease=factor))
+    if not scales:
+        return pattern
+    panels = tuple(scaled_panel(p, scales[p.name], 1.0) if scales.get(p.name, 1.0) > 1.0 else p for p in pattern.panels)
+    return validate_pattern(replace(pattern, panels=panels, pieces=tuple(pieces)))
+
+
+def _garment(pattern: Pattern, piece: Piece) -> Pattern:
+    """One garment of an outfit as a pattern of its own panels and the seams among them."""
+    panels = pattern.panels[piece.first:piece.first + piece.count]
+    names = {p.name for p in panels}
+    seams = tuple(s for s in pattern.seams if s.a.panel in names and s.b.panel in names)
+    return replace(pattern, panels=panels, seams=seams, attachments=(), pieces=())
 
 
 def _unique(names):

@@ -253,7 +253,8 @@ class Piece:
     ``first + count − 1`` of the outfit's pattern.
 
     ``layer`` orders the garments (larger is further out); ``clearance`` [m] is what its placement
-    adds to its panels' own: the room the garments inside it take.
+    adds to its panels' own: the room the garments inside it take; ``ease`` is how much wider across
+    its loops that lie over another garment's were made (:func:`tailor.outfit.ease_layers`; 1: as drafted).
     """
 
     name: str
@@ -261,6 +262,7 @@ class Piece:
     count: int
     layer: int = 0
     clearance: float = 0.0
+    ease: float = 1.0
 
 
 @dataclass(frozen=True, slots=True)

@@ -26,7 +26,8 @@ import numpy as np
 from .errors import FitError
 from .pattern import LandmarkPlacement
 
-__all__ = ["Loop", "pattern_loops", "check_loops", "NEGATIVE_EASE", "FitError", "grade", "grade_scales"]
+__all__ = ["Loop", "pattern_loops", "check_loops", "loop_girth", "NEGATIVE_EASE", "FitError", "grade", "grade_scales",
+           "scaled_panel"]
 
 NEGATIVE_EASE = 0.05
 """Share by which a loop may be shorter than the girth it goes round (a snug, stretched fit)."""
@@ -132,11 +133,11 @@ def check_loops(pattern, landmarks, *, negative_ease: float = NEGATIVE_EASE) -> 
     """
     out = []
     for loop in pattern_loops(pattern):
-        name = "bust" if loop.landmark == "chest" else loop.landmark
-        mark = landmarks.get(name) or landmarks.get(loop.landmark)
-        if mark is None:
+        girth = loop_girth(landmarks, loop.landmark)
+        if girth is None:
             continue
-        loop = replace(loop, girth=mark.girth)
+        name = "bust" if loop.landmark == "chest" else loop.landmark
+        loop = replace(loop, girth=girth)
         if loop.length < (1.0 - negative_ease) * loop.girth:
             raise FitError(
                 f"{pattern.source}: the {loop.landmark.replace('_', ' ')} loop ({', '.join(loop.panels)}) is "
@@ -146,6 +147,13 @@ def check_loops(pattern, landmarks, *, negative_ease: float = NEGATIVE_EASE) -> 
             )
         out.append(loop)
     return out
+
+
+def loop_girth(landmarks, landmark: str) -> float | None:
+    """The body's girth [m] where a loop round ``landmark`` lies (a chest loop goes round the bust);
+    None where the body has no such landmark."""
+    mark = landmarks.get("bust" if landmark == "chest" else landmark) or landmarks.get(landmark)
+    return None if mark is None else mark.girth
 
 
 # ---- grading ---------------------------------------------------------------------------------------
@@ -202,7 +210,7 @@ def _scale_curve(curve, f):
     return Curve(curve.kind, pts, radius, curve.large_arc, curve.sweep)
 
 
-def _scaled_panel(panel, sx, sy):
+def scaled_panel(panel, sx, sy):
     """``panel`` scaled by (sx, sy) about its anchor (a rigid placement: about its origin, moving it too)."""
     pl = panel.placement
     if isinstance(pl, LandmarkPlacement):
@@ -244,7 +252,7 @@ def _match_seams(pattern, graded, scales):
         lo, hi = 0.5, 2.0
         for _ in range(40):  # the seam's length grows with the panel's width: bisect the factor
             k = 0.5 * (lo + hi)
-            trial = replace(graded, panels=tuple(_scaled_panel(p, sx * k, sy) if p.name == panel.name else q
+            trial = replace(graded, panels=tuple(scaled_panel(p, sx * k, sy) if p.name == panel.name else q
                                                  for p, q in zip(pattern.panels, graded.panels)))
             lo, hi = (k, hi) if sum(trial.side_length(m) for m, _ in own) < target else (lo, k)
         graded = trial
@@ -263,6 +271,6 @@ def grade(pattern, body, design):
     from .pattern import validate_pattern
 
     scales = grade_scales(pattern, body, design)
-    graded = replace(pattern, panels=tuple(_scaled_panel(p, *scales[p.name]) for p in pattern.panels))
+    graded = replace(pattern, panels=tuple(scaled_panel(p, *scales[p.name]) for p in pattern.panels))
     graded = _match_seams(pattern, graded, scales)
     return validate_pattern(graded), scales

@@ -92,6 +92,35 @@ def test_an_outer_garment_is_dressed_over_the_inner_one_as_it_lies():
     assert len(edge_crossings(x, mesh.faces)) == 0 and out_of_order(x, garment, body.vertices, body.faces)[0, 1] == 0
 
 
+def test_an_outer_loop_is_eased_to_keep_its_own_ease_over_the_inner_loop():
+    """A skirt's waist (88 cm on an 84.3 cm waist) over trousers' band of 88 cm goes round that band
+    one layer further out with its own ease: 88 + 2π·spacing + 3.7 cm, its panels widened across
+    alike; the trousers and a T-shirt over trousers (no loop at a common landmark) are left."""
+    import math
+
+    from tailor.measure import measure_body
+    from tailor.outfit import ease_layers
+    from tailor.sizing import loop_girth, pattern_loops
+
+    body = read_body("mannequin")
+    landmarks = measure_body(body, body.vertices)
+    spacing = 0.003
+    pattern = outfit(_patterns("trousers", "skirt"))
+    eased = ease_layers(pattern, landmarks, spacing)
+    waist = next(lp for lp in pattern_loops(_patterns("skirt")[0]) if lp.landmark == "waist")
+    band = next(lp for lp in pattern_loops(_patterns("trousers")[0]) if lp.landmark == "waist")
+    want = band.length + 2 * math.pi * spacing + waist.length - loop_girth(landmarks, "waist")
+    assert want > waist.length
+    assert eased.pieces[0].ease == 1.0 and eased.pieces[1].ease == pytest.approx(want / waist.length, rel=1e-9)
+    for p, q in zip(pattern.panels, eased.panels):
+        width = np.ptp(np.asarray(q.vertices)[:, 0]) / np.ptp(np.asarray(p.vertices)[:, 0])
+        height = np.ptp(np.asarray(q.vertices)[:, 1]) / np.ptp(np.asarray(p.vertices)[:, 1])
+        assert width == pytest.approx(eased.pieces[1].ease if p.name.startswith("skirt/") else 1.0)
+        assert height == pytest.approx(1.0)
+    plain = outfit(_patterns("trousers", "tshirt"))
+    assert ease_layers(plain, landmarks, spacing) is plain
+
+
 @pytest.fixture(scope="module")
 def outfit_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("outfit") / "run"

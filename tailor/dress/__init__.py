@@ -21,12 +21,12 @@ from ..contact import ContactPipeline, body_margin
 from ..integrators import make_integrator
 from ..measure import measure_body
 from ..mesh import discretise
-from ..outfit import garment_of_vertex, out_of_order, outfit
+from ..outfit import ease_layers, garment_of_vertex, out_of_order, outfit
 from ..limbwalls import limb_walls
 from ..placement import place_panels
 from ..sim import quality as sim_quality
 from ..sizing import check_loops
-from .garment import Garment
+from .garment import Garment, layer_spacing
 from .options import DRAPE_RESOLUTION, SETTLE_QUALITY, DrapeOptions
 from .phases import Dressing, animate, settle, sew, transition
 from .report import DrapeProgress, DrapeReport, DrapeResult, PhaseReport
@@ -84,6 +84,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
     if options is not None and (fabric is not None or kwargs):
         opts = replace(options, **kwargs, **({"fabric": fabric} if fabric is not None else {}))
     d, loops, x0 = prepare(pattern, body, opts, on_frame, progress)
+    pattern = d.garment.pattern  # an outfit's, eased (tailor.outfit.ease_layers)
     report = _header(d, pattern, body, loops, opts)
     report.placement_crossings = _placement_crossings(x0, d.garment.mesh, pattern)
     report.garments = _garments(pattern, d.garment.mesh)
@@ -103,7 +104,6 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     sew; also the pattern's loops checked against the body and the placed positions."""
     base = opts.fabric or pattern.fabric
     fabrics = {i: (p.fabric or base) for i, p in enumerate(pattern.panels)}
-    mesh = discretise(pattern, opts.resolution)
     integ = make_integrator(opts.integrator)
     q = sim_quality(opts.quality)
     # implicit steps shrink with the mesh: body contact is resolved once a step, so a vertex must
@@ -114,6 +114,8 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
         settle = max(still, SETTLE_QUALITY.garment_step(opts.resolution))  # quasi-static: the coarse step
     timeline = Timeline(body, still, settle_step=settle)
     landmarks = measure_body(body, timeline.pose)
+    pattern = ease_layers(pattern, landmarks, layer_spacing(fabrics))  # an outfit's outer loops round the inner ones
+    mesh = discretise(pattern, opts.resolution)
     loops = check_loops(pattern, landmarks)  # a loop too small for the body fails now, not at the sewing time-out
     placer = Placer(pattern, mesh, landmarks, InsideTest(timeline.pose, body.faces))
     x0 = placer()
@@ -161,7 +163,8 @@ def _garments(pattern, mesh) -> dict | None:
     return {piece.name: {"layer": piece.layer,
                          "panels": [p.name for p in pattern.panels[piece.first:piece.first + piece.count]],
                          "vertices": int(vertices[k]), "faces": int(faces[k]),
-                         "placement_clearance_added_m": round(piece.clearance, 6)}
+                         "placement_clearance_added_m": round(piece.clearance, 6),
+                         "loops_eased_across": round(piece.ease, 4)}
             for k, piece in enumerate(pattern.pieces)}
 
 

@@ -49,6 +49,12 @@ def attachment_vertices(pattern, mesh, attachment) -> np.ndarray:
     return ids[(t >= lo - 1e-9) & (t <= hi + 1e-9)]
 
 
+def layer_spacing(fabrics: dict) -> float:
+    """Distance kept from the body and between layers of cloth [m]: the thickest of ``fabrics``
+    (panel index → Fabric) plus 2 mm."""
+    return max(f.thickness for f in fabrics.values()) + 0.002
+
+
 class Garment:
     """A discretised pattern's simulated vertices, as sewing and tearing renumber them.
 
@@ -79,8 +85,8 @@ class Garment:
 
     @property
     def thickness(self) -> float:
-        """Distance kept from the body and between layers [m]: the thickest fabric plus 2 mm."""
-        return max(f.thickness for f in self.fabrics.values()) + 0.002
+        """Distance kept from the body and between layers [m] (:func:`layer_spacing`)."""
+        return layer_spacing(self.fabrics)
 
     def frame(self, state) -> np.ndarray:
         """Positions of every mesh vertex (seam copies included), as frames are written."""
