@@ -30,6 +30,7 @@ handles one garment:
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -37,6 +38,7 @@ import numpy as np
 from .errors import PatternError
 from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSide, validate_pattern
 from .placement import LAYER_GAP
+from .sizing import loop_girth, pattern_loops, scaled_panel
 
 __all__ = ["outfit", "ease_layers", "garment_of_vertex", "out_of_order"]
 
@@ -86,10 +88,6 @@ def ease_layers(pattern: Pattern, landmarks, spacing: float) -> Pattern:
     same length and is pulled through it or torn apart by the squeeze (docs/outfits.md). ``landmarks``
     are the body's (:func:`tailor.measure.measure_body`); a loop round a landmark the body lacks is left.
     """
-    import math
-
-    from .sizing import loop_girth, pattern_loops, scaled_panel
-
     if len(pattern.pieces) < 2:
         return pattern
     outermost: dict = {}  # landmark → length of the outermost loop round it so far
