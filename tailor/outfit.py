@@ -40,7 +40,14 @@ from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSi
 from .placement import LAYER_GAP
 from .sizing import loop_girth, pattern_loops, scaled_panel
 
-__all__ = ["outfit", "ease_layers", "garment_of_vertex", "out_of_order"]
+__all__ = ["outfit", "ease_layers", "garment_of_vertex", "out_of_order", "ATTACH_RISE"]
+
+ATTACH_RISE = 0.015
+"""How much higher [m] an outer garment held to a landmark an inner garment is held to is placed, for
+each such garment inside it: its band's top edge then wraps over the inner band's instead of
+meeting it edge to edge. Two held top edges at one height lie within one thickness of each other,
+held there, and as the body moves they cross where no contact can part them (a skirt over trousers
+at 2 cm stopped in its 4th walking frame; 1.5 cm higher, all 50 frames without a crossing)."""
 
 def outfit(patterns, *, name: str | None = None) -> Pattern:
     """One pattern dressing ``patterns`` together, innermost first (see the module).
@@ -57,11 +64,15 @@ def outfit(patterns, *, name: str | None = None) -> Pattern:
     names = _unique([patterns[i].name for i in order])
     panels, seams, attachments, pieces = [], [], [], []
     room = 0.0  # how far out the garments placed so far reach
+    held: list = []  # the landmarks each garment so far is held to
     for garment, i in zip(names, order):
         p = patterns[i]
         extra = room + LAYER_GAP if pieces else 0.0
-        pieces.append(Piece(garment, len(panels), len(p.panels), p.layer, extra))
-        panels += [replace(q, name=f"{garment}/{q.name}", fabric=q.fabric or p.fabric)
+        landmarks = {a.target for a in p.attachments}
+        rise = ATTACH_RISE * sum(1 for inner in held if inner & landmarks)
+        held.append(landmarks)
+        pieces.append(Piece(garment, len(panels), len(p.panels), p.layer, extra, rise=rise))
+        panels += [replace(q, name=f"{garment}/{q.name}", fabric=q.fabric or p.fabric, placement=_raised(q.placement, rise))
                    for q in p.panels]
         seams += [_renamed_seam(s, garment, len(seams) + k) for k, s in enumerate(p.seams)]
         attachments += [_renamed_attachment(a, garment, len(attachments) + k) for k, a in enumerate(p.attachments)]
@@ -72,6 +83,13 @@ def outfit(patterns, *, name: str | None = None) -> Pattern:
                        attachments=tuple(attachments), fabric=first.fabric,
                        source=" + ".join(patterns[i].source for i in order), pieces=tuple(pieces))
     return validate_pattern(combined)
+
+
+def _raised(placement, rise: float):
+    """A landmark placement ``rise`` [m] higher (other placements as they are)."""
+    if not rise or not isinstance(placement, LandmarkPlacement):
+        return placement
+    return replace(placement, offset=placement.offset + rise)
 
 
 def ease_layers(pattern: Pattern, landmarks, spacing: float) -> Pattern:

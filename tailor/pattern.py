@@ -254,7 +254,8 @@ class Piece:
 
     ``layer`` orders the garments (larger is further out); ``clearance`` [m] is what its placement
     adds to its panels' own: the room the garments inside it take; ``ease`` is how much wider across
-    its loops that lie over another garment's were made (:func:`tailor.outfit.ease_layers`; 1: as drafted).
+    its loops that lie over another garment's were made (:func:`tailor.outfit.ease_layers`; 1: as drafted);
+    ``rise`` [m] how much higher than drafted its landmark placements put it (:data:`tailor.outfit.ATTACH_RISE`).
     """
 
     name: str
@@ -263,6 +264,7 @@ class Piece:
     layer: int = 0
     clearance: float = 0.0
     ease: float = 1.0
+    rise: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)

@@ -197,3 +197,31 @@ def test_a_skirt_over_trousers_keeps_its_layer(frames):
     assert max(report.out_of_layer_per_frame) <= 10
     garment = garment_of_vertex(result.pattern, result.mesh.vertex_panel)
     assert np.count_nonzero(garment == 1) > 500
+
+
+def test_an_outer_garment_held_where_an_inner_one_is_held_is_raised_and_held_a_layer_out():
+    """The skirt and the trousers are both held at the waist: the skirt is placed ATTACH_RISE higher
+    (its band's top edge over the trousers' band, not edge to edge with it) and its held vertices are
+    kept two layer spacings from the body, the trousers' one (a T-shirt, held nowhere, is left)."""
+    from tailor.outfit import ATTACH_RISE
+
+    trousers, skirt = _patterns("trousers", "skirt")
+    pattern = outfit([trousers, skirt])
+    assert [p.rise for p in pattern.pieces] == [0.0, ATTACH_RISE]
+    for p, q in zip(skirt.panels, pattern.panels[len(trousers.panels):]):
+        assert q.placement.offset == pytest.approx(p.placement.offset + ATTACH_RISE)
+    assert [p.rise for p in outfit(_patterns("trousers", "tshirt")).pieces] == [0.0, 0.0]
+
+    from tailor.dress.phases import sew
+
+    body = read_body("mannequin")
+    d, _, x0 = prepare(pattern, body, DrapeOptions(resolution=0.04))
+    g = d.garment
+    state, _ = sew(d, x0)
+    state, held = g.attach(state, d.contacts.body, d.timeline.pose)
+    garment = np.zeros(g.weld.max() + 1, np.intp)
+    garment[g.weld] = garment_of_vertex(pattern, g.mesh.vertex_panel)
+    layer = garment[held.ids]
+    assert set(layer.tolist()) == {0, 1}
+    assert held.offset[layer == 0].min() >= g.thickness - 1e-12
+    assert held.offset[layer == 1].min() >= 2 * g.thickness - 1e-12

@@ -164,7 +164,7 @@ def _garments(pattern, mesh) -> dict | None:
                          "panels": [p.name for p in pattern.panels[piece.first:piece.first + piece.count]],
                          "vertices": int(vertices[k]), "faces": int(faces[k]),
                          "placement_clearance_added_m": round(piece.clearance, 6),
-                         "loops_eased_across": round(piece.ease, 4)}
+                         "loops_eased_across": round(piece.ease, 4), "placement_raised_m": round(piece.rise, 6)}
             for k, piece in enumerate(pattern.pieces)}
 
 

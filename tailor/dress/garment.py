@@ -204,7 +204,11 @@ class Garment:
         if not len(self.pins):
             return state, None
         wid, first = np.unique(self.weld[self.pins], return_index=True)
-        return state, Attachments(wid, tri[ok][first], bary[ok][first], np.maximum(dist[ok][first], self.thickness),
+        # an outfit's garment k is held k layers out: its band pinned over an inner garment's band
+        # would otherwise pin the two within one thickness, where no contact can part them
+        layer = garment_of_vertex(self.pattern, self.mesh.vertex_panel)[self.pins[first]] if self.pattern.pieces else 0
+        floor = self.thickness * (1.0 + layer)
+        return state, Attachments(wid, tri[ok][first], bary[ok][first], np.maximum(dist[ok][first], floor),
                                   collider.faces)
 
     def allow_changes(self, tear: bool) -> float:
