@@ -359,10 +359,10 @@ class ContactPipeline:
         outfit's layers, the body at ``body_x``) when it changed."""
         layered = self.panel_layer is not None and body_x is not None and self.settings.layers
         key = (model.vertex_count, self._version, layered)
-        start = self._start
-        if self._self is not None and self._self_key[:2] == key[:2]:  # same numbering, new settings
-            start = self._self.previous
+        start = self._start  # where the next step starts, when told (follow)
         if self._self is None or self._self_key != key:
+            if start is None and self._self is not None and self._self_key[:2] == key[:2]:
+                start = self._self.previous  # the same numbering under new settings: where the last one ended
             stats = self._self.stats if self._self is not None else None
             friction = float(np.mean(self.friction * self.settings.friction_scale))
             layers = None
@@ -375,9 +375,9 @@ class ContactPipeline:
                                       garment=self._vertex_garment(model))
             if stats is not None:
                 self._self.carry_stats(stats)
-            if start is not None and len(start) == model.vertex_count:
-                self._self.moved(start)
             self._self_key = key
+        if start is not None and len(start) == model.vertex_count:
+            self._self.moved(start)
         self._start = None
         return self._self
 

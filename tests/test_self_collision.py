@@ -452,3 +452,24 @@ def test_an_open_seam_passes_through_its_own_garment_but_not_through_another(out
     state = model.state(x1, v)
     collider.respond(inv_mass, state, 0.01)
     assert (state.x[upper, 2].mean() > state.x[~upper, 2].mean()) == outfit
+
+
+def test_positions_moved_between_steps_are_the_sides_the_next_step_keeps():
+    """Told where the next step starts (``follow(friction, x)``) with the numbering unchanged, the
+    self-collider keeps the sides the cloth has there: the upper panel, lifted from below the lower
+    one to above it between steps (untangled, attached), stays above through a step that does not
+    cross; an unchanged collider would still remember it below and pull it back through."""
+    from tailor.contact import ContactPipeline
+
+    model, x0 = stacked(-0.005, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    contacts = ContactPipeline(None, None, thickness=0.003, friction=0.3, self_collision="on")
+    contacts.respond(model, model.state(x0.copy(), np.zeros_like(x0)), 0.01)  # remembers it below
+    x_mid = x0.copy()
+    x_mid[upper, 2] = 0.01
+    contacts.follow(0.3, x_mid)
+    x1 = x_mid.copy()
+    x1[upper, 2] = 0.008
+    state = model.state(x1, np.zeros_like(x1))
+    contacts.respond(model, state, 0.01)
+    assert state.x[upper, 2].min() > state.x[~upper, 2].max() + 0.002
