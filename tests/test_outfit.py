@@ -182,19 +182,21 @@ def test_an_outfit_exports_one_mesh_per_garment(outfit_run, tmp_path):
     assert [p.GetName() for p in stage.GetPrimAtPath("/tailor").GetChildren()] == ["trousers", "tshirt"]
 
 
-@pytest.mark.parametrize("frames", [1, pytest.param(3, marks=pytest.mark.slow)])
-def test_a_skirt_over_trousers_keeps_its_layer(frames):
+@pytest.mark.parametrize("resolution,frames", [(0.04, 1), pytest.param(0.04, 3, marks=pytest.mark.slow),
+                                               pytest.param(0.02, 10, marks=pytest.mark.slow)])
+def test_a_skirt_over_trousers_keeps_its_layer(resolution, frames):
     """The hard case: the skirt's waistband, drafted for the bare waist, closes over the trousers'
-    band. Sewn inner first, then with the layer rule holding the skirt outside the trousers."""
+    band (eased to, raised over it). Sewn inner first, then with the layer rule holding the skirt
+    outside the trousers. At 2 cm it stopped in the 4th walking frame before the bands were held apart."""
     from tailor import drape
 
-    result = drape(_patterns("trousers", "skirt"), read_body("mannequin-walk"), resolution=0.04, frames=frames)
+    result = drape(_patterns("trousers", "skirt"), read_body("mannequin-walk"), resolution=resolution, frames=frames)
     report = result.report
     assert max(report.crossings_per_frame) == 0
     assert report.max_penetration_m <= 0.001
     # a few band vertices pressed together at the waist may read nearer the body than the nearest
-    # trouser vertex (0–7 a frame over ten frames); a skirt through the trousers would put hundreds there
-    assert max(report.out_of_layer_per_frame) <= 10
+    # trouser vertex (0–7 a frame at 4 cm, 2–14 at 2 cm); a skirt through the trousers puts hundreds there
+    assert max(report.out_of_layer_per_frame) <= (10 if resolution >= 0.04 else 25)
     garment = garment_of_vertex(result.pattern, result.mesh.vertex_panel)
     assert np.count_nonzero(garment == 1) > 500
 
