@@ -247,6 +247,7 @@ class ContactPipeline:
         self._rings = None  # (numbering, each vertex's neighbours) for untangling
         self._waiting = None  # (N,) bool: an outfit's garments waiting outside to sew, out of the self-collision
         self._start = None  # (N, 3) where the next step starts after a renumbering (follow), for the self-collider
+        self._layer_thickness = None  # (numbering, (N,) body thickness per vertex) of an outfit
 
     def configure(self, settings: ContactSettings) -> None:
         """What contact does from now on (a new phase)."""
@@ -289,7 +290,7 @@ class ContactPipeline:
         if self.body is None or not self.settings.hold:
             return None
         bx, bv, k = self.motion.at(state.t + dt)
-        return self.body.landing(model, x_end, v_end, dt, bx, bv, k, thickness=self.thickness, skip=held)
+        return self.body.landing(model, x_end, v_end, dt, bx, bv, k, thickness=self.body_thickness(model), skip=held)
 
     def hold(self, model) -> Contacts | None:
         """The body contacts the next step on ``model`` should hold (those the last response left resting)."""
@@ -306,7 +307,7 @@ class ContactPipeline:
         if self.body is not None:
             mu = self.friction * self.settings.friction_scale
             v0 = state.v.copy()
-            contacts = self.body.respond(model, state, dt, bx, bv, k, thickness=self.thickness, friction=mu,
+            contacts = self.body.respond(model, state, dt, bx, bv, k, thickness=self.body_thickness(model), friction=mu,
                                          impulse=impulses)
             self.pending = contacts if self.settings.hold else None
             response = (state.v - v0) * np.asarray(model.vertex_mass)[:, None]
@@ -381,6 +382,17 @@ class ContactPipeline:
         self._start = None
         return self._self
 
+    def body_thickness(self, model):
+        """Distance [m] the body keeps each vertex of ``model`` at: the thickness, and for an outfit's
+        garment k (innermost 0) k + 1 thicknesses, so that the body's response never pushes two layers
+        to one offset (where the self-collision must then part them every step, or cannot)."""
+        if self.panel_layer is None:
+            return self.thickness
+        key = (model.vertex_count, self._version)
+        if self._layer_thickness is None or self._layer_thickness[0] != key:
+            self._layer_thickness = (key, self.thickness * (1.0 + self._vertex_garment(model)))
+        return self._layer_thickness[1]
+
     def _vertex_garment(self, model):
         """(N,) an outfit's garment of each vertex of ``model`` (None for one garment)."""
         if self.panel_layer is None:
@@ -411,7 +423,7 @@ class ContactPipeline:
         if self.body is None:
             return 0
         bx, bv, k = self.motion.at(state.t)
-        moved = self.body.rescue(model, state, bx, bv, k, thickness=self.thickness)
+        moved = self.body.rescue(model, state, bx, bv, k, thickness=self.body_thickness(model))
         if moved:
             self._restart(state.x)
         self.rescued += moved

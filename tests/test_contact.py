@@ -83,3 +83,18 @@ def test_a_held_edge_keeps_its_height_and_its_panel_stays_below_it():
     assert state.x[3, 2] == moved[3, 2] and state.v[3, 2] == 1.0  # below: free
     assert state.x[4, 2] == moved[4, 2]  # another panel (the skirt): free
 
+
+
+def test_an_outfits_garments_are_kept_each_its_layers_out_from_the_body():
+    """Two garments lying on the floor (the body) at one height: the body keeps the inner one a
+    thickness out and the outer one two, so its response does not press them into one another."""
+    mesh, model = cloth_model([rectangle(0.2, 0.2, "inner"), rectangle(0.2, 0.2, "outer")], "cotton", 0.05)
+    x = np.c_[model.rest_uv - 0.1, np.full(model.vertex_count, 0.5 * THICKNESS)]
+    state = model.state(x, np.tile((0.0, 0.0, -0.1), (model.vertex_count, 1)))
+    bv, bf = floor()
+    pipe = ContactPipeline(BodyCollider(bv[None], bf, margin=body_margin(THICKNESS)), StaticBody(bv),
+                           thickness=THICKNESS, friction=0.5, panel_layer=np.array([0, 1]))
+    pipe.configure(ContactSettings(self_collision=False))
+    pipe.respond(model, state, 0.01)
+    outer = np.isin(np.arange(model.vertex_count), mesh.panel_vertices(1))
+    assert np.allclose(state.x[~outer, 2], THICKNESS) and np.allclose(state.x[outer, 2], 2 * THICKNESS)

@@ -221,7 +221,7 @@ class BodyCollider:
         state.x[ids] = out
         state.v[ids] = (body_v[self.faces[tri]] * bary[:, :, None]).sum(axis=1)
         if self._previous is not None and len(self._previous) == len(state.x):
-            self._previous[ids] = thickness
+            self._previous[ids] = _at(thickness, ids)
         return len(ids)
 
     def push_out(self, points, body_x, frame: int, *, clearance: float, reach: float = 0.15, skip=None):
@@ -236,7 +236,7 @@ class BodyCollider:
         keys = self._query(points[inside], frame, np.arange(len(inside)), radius=reach)
         dist, tri, bary, normal = self._closest(points[inside], *self._csr(keys, len(inside)), body_x)
         ok = (tri >= 0) & (dist < 0.0)
-        out = points[inside[ok]] + (clearance - dist[ok])[:, None] * normal[ok]
+        out = points[inside[ok]] + (_at(clearance, inside[ok]) - dist[ok])[:, None] * normal[ok]
         return inside[ok], tri[ok], bary[ok], out
 
     def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness: float, skip=None):
@@ -265,7 +265,8 @@ class BodyCollider:
         start = dist[close] - dt * vn  # where it started, relative to the body
         ok = (vn < 0) & (start > -0.5 * self.margin)
         close, n, vb, start = close[ok], n[ok], vb[ok], start[ok]
-        return Contacts(close, n, np.einsum("ij,ij->i", vb, n) - np.maximum(start - thickness, 0.0) / dt, model.vertex_count)
+        return Contacts(close, n, np.einsum("ij,ij->i", vb, n) - np.maximum(start - _at(thickness, close), 0.0) / dt,
+                        model.vertex_count)
 
     def _out_of_reach(self, x, body_x, thickness) -> np.ndarray:
         """Vertices at ``x`` that cannot be within ``thickness`` of the body at ``body_x``: their distance
@@ -304,7 +305,7 @@ class BodyCollider:
         plausible = (dist > -0.5 * self.margin) | crossed
         hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & plausible)
         self._previous = np.where(tri >= 0, dist, np.inf)
-        self._previous[hit] = thickness  # pushed back out by the response
+        self._previous[hit] = _at(thickness, hit)  # pushed back out by the response
         return hit, dist, tri, bary, normal
 
     def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness: float, friction,
@@ -326,6 +327,7 @@ class BodyCollider:
         n = normal[hit]
         movable = ~model.vertex_pinned[hit]
         hit, n, vb = hit[movable], n[movable], vb[movable]
+        thickness = _at(thickness, hit)
         rel = state.v[hit] - vb  # Eq. 9
         vn = np.einsum("ij,ij->i", rel, n)  # Eq. 10
         # a vertex that started the step above the thickness falls until it lands on it (its
@@ -359,6 +361,12 @@ class BodyCollider:
         mu = np.broadcast_to(mu, hit.shape)
         return Contacts(hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]), model.vertex_count,
                         stick=np.ones(int(rest.sum()), bool), body_velocity=vb[rest], friction=mu[rest])
+
+
+def _at(thickness, ids):
+    """``thickness`` [m] of the vertices ``ids``: one for all, or each vertex's own ((N,) array: an
+    outfit's garments, each kept its layers out)."""
+    return thickness if np.ndim(thickness) == 0 else np.asarray(thickness)[ids]
 
 
 GAP_REACH = (0.03, 0.15)
