@@ -227,3 +227,16 @@ def test_an_outer_garment_held_where_an_inner_one_is_held_is_raised_and_held_a_l
     assert set(layer.tolist()) == {0, 1}
     assert held.offset[layer == 0].min() >= g.thickness - 1e-12
     assert held.offset[layer == 1].min() >= 2 * g.thickness - 1e-12
+
+
+@pytest.mark.parametrize("resolution,frames", [(0.04, 1), pytest.param(0.02, 5, marks=pytest.mark.slow)])
+def test_a_t_shirt_over_a_dress_keeps_its_layer(resolution, frames):
+    """The other hard case: a T-shirt over a dress, two layers at the armpits and the chest. At 2 cm
+    it blew up right after sewing while the body pushed both garments to one offset."""
+    from tailor import drape
+
+    result = drape(_patterns("dress", "tshirt"), read_body("mannequin-walk"), resolution=resolution, frames=frames)
+    report = result.report
+    assert max(report.crossings_per_frame) == 0
+    assert report.max_penetration_m <= 0.001
+    assert max(report.out_of_layer_per_frame) <= 10
