@@ -203,7 +203,7 @@ class BodyCollider:
             tri[out], dist[out] = -1, np.inf
         return dist, tri, bary, normal
 
-    def rescue(self, model, state, body_x, body_v, frame: int, *, thickness: float, reach: float = 0.15) -> int:
+    def rescue(self, model, state, body_x, body_v, frame: int, *, thickness, reach: float = 0.15) -> int:
         """Return cloth vertices trapped inside the body to its surface; how many were moved.
 
         :meth:`respond` trusts only contacts within half the margin, or vertices it saw cross,
@@ -239,7 +239,7 @@ class BodyCollider:
         out = points[inside[ok]] + (_at(clearance, inside[ok]) - dist[ok])[:, None] * normal[ok]
         return inside[ok], tri[ok], bary[ok], out
 
-    def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness: float, skip=None):
+    def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness, skip=None):
         """The vertices a step would bring within ``thickness`` of the body, as :class:`Contacts` to hold.
 
         ``skip``: ids not to test (the contacts the solve already holds: most of a resting cloth's).
@@ -308,9 +308,12 @@ class BodyCollider:
         self._previous[hit] = _at(thickness, hit)  # pushed back out by the response
         return hit, dist, tri, bary, normal
 
-    def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness: float, friction,
+    def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness, friction,
                 impulse=None) -> Contacts:
         """Eq. 9–14 on ``state`` in place: push out to ``thickness``, cancel approach, apply friction.
+
+        ``thickness`` [m] is one for every vertex or (N,) each vertex's own (as for :meth:`rescue`
+        and :meth:`landing`: an outfit's garments kept each its layers out).
 
         ``impulse`` (N,) [N·s], optional: the normal impulse the integrator's solve already gave
         each vertex it held on the body (the contacts this returned last step); it counts towards

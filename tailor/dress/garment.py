@@ -204,8 +204,9 @@ class Garment:
         if not len(self.pins):
             return state, None
         wid, first = np.unique(self.weld[self.pins], return_index=True)
-        # an outfit's garment k is held k layers out: its band pinned over an inner garment's band
-        # would otherwise pin the two within one thickness, where no contact can part them
+        # an outfit's garment k is held k + 1 thicknesses out, as the body keeps it (ContactPipeline.
+        # body_thickness): a band pinned over an inner garment's band would otherwise be pinned within
+        # one thickness of it, where no contact can part them
         layer = garment_of_vertex(self.pattern, self.mesh.vertex_panel)[self.pins[first]] if self.pattern.pieces else 0
         floor = self.thickness * (1.0 + layer)
         return state, Attachments(wid, tri[ok][first], bary[ok][first], np.maximum(dist[ok][first], floor),
