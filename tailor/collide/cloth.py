@@ -123,8 +123,9 @@ class SelfCollider:
         touching them are found again (:data:`PARTIAL_SHARE`; 0: all, always). It pays where part
         of the cloth lies still while the rest moves (an outfit's sewn garment while the next sews).
     garment : (N,) int, optional
-        An outfit's garment of each vertex: the open seams :meth:`ignore` leaves free pass only
-        through their own garment, never through another (a skirt's band closing over trousers').
+        An outfit's garment of each vertex, innermost 0 (default: from ``layers``): the open seams
+        :meth:`ignore` leaves free pass only through their own garment, never through another (a
+        skirt's band closing over trousers'), and ``layers`` judges pairs between garments by it.
     """
 
     def __init__(self, faces, face_group, x, *, thickness: float, margin: float = SELF_MARGIN, mode: str = "auto",
@@ -141,8 +142,9 @@ class SelfCollider:
         self.mode = mode
         self.layers = layers
         self.partial = float(partial)
-        self._vertex_layer = layers.vertex_layer(self.faces, self.n) if layers is not None else None
-        self._garment = None if garment is None else np.asarray(garment, np.int64)
+        if garment is None and layers is not None:
+            garment = layers.vertex_layer(self.faces, self.n)
+        self._garment = None if garment is None else np.asarray(garment, np.int64)  # each vertex's garment (its layer)
         e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         self._ring_csr = vertex_rings(self.faces, self.n)  # each vertex's neighbours across an edge
         # undirected edges and each face's edges, for edge–edge pairs
@@ -275,13 +277,13 @@ class SelfCollider:
         """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""
         if self.layers is None:
             return np.zeros(len(tri), np.int8)
-        return self.layers.vertex_triangle_sides(self._vertex_layer, vertex, tri)
+        return self.layers.vertex_triangle_sides(self._garment, vertex, tri)
 
     def _edge_directions(self, x, ee):
         """Each edge–edge candidate's outward direction at ``x`` (:class:`Layers`; none for a single garment)."""
         if self.layers is None:
             return np.zeros((len(ee), 3))
-        return self.layers.edge_directions(self._vertex_layer, self.faces, x, ee)
+        return self.layers.edge_directions(self._garment, self.faces, x, ee)
 
     def ignore(self, vertices, keep=None) -> None:
         """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact, as a
