@@ -363,6 +363,28 @@ def test_a_narrower_margin_asks_about_fewer_pairs_and_finds_the_same_contacts():
     np.testing.assert_allclose(x_narrow, x_wide, atol=1e-9)
 
 
+def test_flat_layers_lying_on_each_other_are_candidates_of_each_other_not_of_themselves():
+    """Two flat panels 5 mm apart: ``auto`` asks only about pairs joining the two (a flat patch cannot
+    touch itself or its flat neighbours: the normal-cone test, pair by pair), ``on`` about pairs
+    within each panel too; the upper panel falling onto the lower is stopped the same way."""
+    model, x0 = stacked(0.005, 0.0, offset=0.0, size=0.2, resolution=0.01)
+    upper = panel_vertices(model, 1)
+    v0 = np.zeros_like(x0)
+    v0[upper, 2] = -0.5
+    found = {}
+    for mode in ("on", "auto"):
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode=mode)
+        state = model.state(x0.copy(), v0.copy())
+        contacts = collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01)
+        within = np.count_nonzero(upper[collider._vtx] == upper[model.faces[collider._tri, 0]])
+        within += np.count_nonzero(upper[collider._ee[:, 0]] == upper[collider._ee[:, 2]])
+        found[mode] = (contacts, within, state.v.copy())
+    assert found["auto"][1] == 0 and found["on"][1] > 1000
+    assert found["auto"][0] == found["on"][0] > 0
+    np.testing.assert_allclose(found["auto"][2], found["on"][2], atol=1e-9)
+    assert found["auto"][2][upper, 2].min() > -0.45  # slowed: at 0.5 m/s it would have come within 0 of the lower
+
+
 def test_a_panel_left_out_is_neither_a_contact_nor_a_candidate_until_it_is_let_back_in():
     """An outfit's garment waiting outside while the one inside sews is out of the self-collision:
     a panel falling onto it passes (no contacts, no pairs with it), and is caught once it is back."""
@@ -382,17 +404,19 @@ def test_a_panel_left_out_is_neither_a_contact_nor_a_candidate_until_it_is_let_b
     assert out_pairs < back_pairs  # the upper panel's own pairs only
 
 
-def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair():
-    """A strip swinging over a still panel: the still panel keeps its candidates (partial queries
-    find again only the pairs touching vertices that moved from their anchors), and after every
-    step each vertex–triangle pair within the thickness is among them."""
+@pytest.mark.parametrize("mode", ["on", "auto"])
+def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair(mode):
+    """A corner flapping over a still panel: the still panel keeps its candidates (partial queries
+    find again only the pairs touching vertices that moved from their anchors, and in ``auto`` the
+    pairs of patches that could not touch before and can now), and after every step each
+    vertex–triangle pair within the thickness is among them."""
     from tailor.collide.cloth import PARTIAL_SHARE
     from tailor.collide.cloth_kernels import unique_ints
     from tailor.collide.grid import vertex_triangle_pairs
 
     model, x0 = stacked(0.004, 0.0, offset=0.0, size=0.2, resolution=0.02)
     upper = panel_vertices(model, 1)
-    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on", partial=PARTIAL_SHARE)
+    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode=mode, partial=PARTIAL_SHARE)
     state = model.state(x0.copy(), np.zeros_like(x0))
     inv_mass = 1.0 / np.asarray(model.vertex_mass)
     rng = np.random.default_rng(2)

@@ -4,7 +4,10 @@ Detection (Carignan §3.4: "any triangle, including those belonging to the cloth
 threshold distance from the cloth's vertices") runs in three stages:
 
 1. **Regions** (``mode="auto"``, :mod:`tailor.collide.regions`): only patches that overlap a patch
-   beyond their neighbourhood, or are folded, take part. Flat cloth is skipped.
+   beyond their neighbourhood, or are folded, take part, and a candidate pair only between two
+   patches that can touch (a patch with itself only if folded). Flat cloth is skipped, and so are
+   the flat neighbourhoods of a patch that touches another (two layers of an outfit lying one over
+   the other pair with each other, not with themselves).
 2. **Broad phase**: the active triangles that come within ``thickness + margin`` of an active
    vertex anywhere on the step's straight-line motion, and the active edges that come that near
    one another, found between boxes swept from each vertex's place at the last step to its place
@@ -57,15 +60,16 @@ from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_
                             touching, touching_vt, unique_ints)
 from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .layers import Layers
-from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
+from .regions import PATCH_EDGES, PATCH_MIN, Regions, allowed_edge_edge, allowed_vertex_triangle, in_sorted
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
 GRID_EDGES = 2.0
 """Side of the broad phase's grid cells, in mean edge lengths of the cloth."""
-MAX_SUBSTEPS = 16
-"""At most this many contact sub-steps per step (each covers one thickness of relative motion)."""
+MAX_SUBSTEPS = 32
+"""At most this many contact sub-steps per step (each covers one thickness of relative motion): a
+panel springing back as settling begins moves 4–5 cm in a step, two garments deep at an armpit."""
 
 PARTIAL_SHARE = 0.5
 """A ``partial`` collider's share: when more of the vertices than this have moved from their anchors,
@@ -160,6 +164,7 @@ class SelfCollider:
         self._ee = np.zeros((0, 4), np.int64)
         self._anchor = None  # (N, 3) each vertex's position relative to the centroid when last queried
         self._active = None  # (F,) bool: the faces the candidates were found among
+        self._pairs = None  # sorted keys of the patch pairs the candidates were found among (None: all)
         self._reach = self.margin  # how deep a pair may have crossed in a step (the narrow phase cut-off beyond thickness)
         self._vtx = np.zeros(0, np.int64)
         self._tri = np.zeros(0, np.int64)
@@ -173,11 +178,15 @@ class SelfCollider:
                       "query_s": 0.0, "response_s": 0.0}
 
     def active_faces(self, x, vertex_boxes=None):
-        """Faces that can touch themselves or one another (``auto``: :meth:`Regions.active_faces`), at
+        """Faces that can touch themselves or one another (``auto``: :meth:`Regions.touching`), at
         ``x`` or, with ``vertex_boxes`` (lo, hi) per vertex, anywhere in them."""
+        return self._touching(x, vertex_boxes)[0]
+
+    def _touching(self, x, vertex_boxes):
+        """(faces that can touch, sorted keys of the patch pairs that can, or None: every pair)."""
         if self.mode == "on" or self.regions.count <= 1:
-            return np.arange(len(self.faces))
-        return self.regions.active_faces(x, vertex_boxes, 0.5 * (self.thickness + self.margin))
+            return np.arange(len(self.faces)), None
+        return self.regions.touching(x, vertex_boxes, 0.5 * (self.thickness + self.margin))
 
     # -- broad phase -----------------------------------------------------------------------------
     def _drift(self, rx, rxp):
@@ -205,12 +214,15 @@ class SelfCollider:
         if moving is not None:  # the others stay at their anchors
             still = ~moving
             lo, hi = np.where(still[:, None], self._anchor, lo), np.where(still[:, None], self._anchor, hi)
-        faces = self._active_now(rx, lo, hi)
+        faces, pairs = self._active_now(rx, lo, hi)
         dirty = None
         if moving is not None:
-            # faces no query has seen: their vertices are queried as if they had moved
+            # faces and patch pairs no query has seen: their vertices are queried as if they had moved
             moving = moving.copy()
             moving[self.faces[faces[~self._active[faces]]].ravel()] = True
+            if pairs is not None and self._pairs is not None:
+                moving[self._patch_vertices(np.setdiff1d(pairs, self._pairs, assume_unique=True))] = True
+                pairs = np.union1d(pairs, self._pairs)
             dirty = moving
             self._active[faces] = True
             faces = np.flatnonzero(self._active)
@@ -221,15 +233,33 @@ class SelfCollider:
             self._active[faces] = True
             self._anchor = rx.copy()
             self.stats["queries"] += 1
+        self._pairs = pairs
         self._find(rx, lo, hi, faces, dirty, exact=rxp is None)
         self.stats["query_s"] += time.perf_counter() - t0
 
     def _active_now(self, x, lo, hi):
-        """The faces that take part now (:meth:`active_faces` without the left-out garments)."""
-        faces = self.active_faces(x, (lo, hi))
+        """(the faces that take part now, without the left-out garments; the patch pairs that can
+        touch, :meth:`Regions.touching`, or None: every pair of those faces can)."""
+        faces, pairs = self._touching(x, (lo, hi))
         if self._left_out is not None:
             faces = faces[~self._left_out[self.faces[faces]].all(axis=1)]
-        return faces
+        return faces, pairs
+
+    def _patch_vertices(self, pairs):
+        """(N,) bool: the vertices of the patches in the patch ``pairs`` (keys ``p · count + q``)."""
+        count = self.regions.count
+        patches = np.zeros(count, bool)
+        patches[pairs // count] = patches[pairs % count] = True
+        out = np.zeros(self.n, bool)
+        out[self.faces[patches[self.regions.face_patch]].ravel()] = True
+        return out
+
+    def _in_touching_patches(self, vertex, tri, ee):
+        """(vertex–triangle, edge–edge) candidates kept: those of patch pairs that can touch."""
+        if self._pairs is None:
+            return np.ones(len(vertex), bool), np.ones(len(ee), bool)
+        return (allowed_vertex_triangle(self.regions, self._pairs, vertex, tri),
+                allowed_edge_edge(self.regions, self._pairs, ee))
 
     def _find(self, x, lo, hi, faces, dirty, *, exact):
         """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the
@@ -253,6 +283,8 @@ class SelfCollider:
             parts = (find(verts[moved], faces), find(verts[~moved], faces[dirty_face]))
             vertex, tri, near = (np.concatenate(p) for p in zip(*parts))
             ee, ee_near = self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty))
+        keep_vt, keep_ee = self._in_touching_patches(vertex, tri, ee)
+        vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
         vertex, tri, near, ee, ee_near = self._drop_ignored(vertex, tri, near, ee, ee_near)
         tri_side = self._tri_sides(vertex, tri)
         if dirty is not None:  # the kept candidates: no end moved

@@ -6,6 +6,13 @@ is not its neighbour or a neighbour's neighbour, or if it (or it with a nearby p
 surface whose normals all lie within 60° of one direction is a height field over it and cannot come
 near itself except through its own neighbourhood (Volino & Magnenat-Thalmann's normal-cone
 argument). Flat cloth is skipped (:class:`~tailor.collide.cloth.SelfCollider`, ``mode="auto"``).
+
+The same test decides which *pairs* of patches may touch (:meth:`Regions.touching`): a patch may
+touch itself only if folded, and another patch only if their boxes meet and they are not a
+neighbourhood that is a height field together. A candidate pair of primitives is kept only if a
+patch of each makes such a pair (:func:`allowed_vertex_triangle`, :func:`allowed_edge_edge`): a
+sleeve's patch near the torso touches the torso, not its own flat neighbours; two garments of an
+outfit lying one over the other touch each other, not themselves.
 """
 
 from __future__ import annotations
@@ -14,11 +21,12 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit, prange
 
 from .cloth_kernels import unique_ints
 from .grid import overlapping_boxes
 
-__all__ = ["Regions", "in_sorted", "FOLDED_COS", "PATCH_EDGES", "PATCH_MIN"]
+__all__ = ["Regions", "in_sorted", "allowed_vertex_triangle", "allowed_edge_edge", "FOLDED_COS", "PATCH_EDGES", "PATCH_MIN"]
 
 FOLDED_COS = 0.5
 """A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
@@ -52,6 +60,77 @@ def in_sorted(keys, q):
     return keys[at] == q
 
 
+@njit(cache=True, inline="always")
+def _has(keys, q):
+    """Whether ``q`` is in the sorted array ``keys`` (binary search)."""
+    lo, hi = 0, len(keys)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if keys[mid] < q:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo < len(keys) and keys[lo] == q
+
+
+@njit(cache=True, parallel=True)
+def _allowed_vt(vertex, tri, face_patch, ptr, patches, keys, count, out):
+    for k in prange(len(vertex)):
+        q = face_patch[tri[k]]
+        ok = False
+        for a in range(ptr[vertex[k]], ptr[vertex[k] + 1]):
+            if _has(keys, patches[a] * count + q):
+                ok = True
+                break
+        out[k] = ok
+
+
+@njit(cache=True, inline="always")
+def _on_edge(ptr, patches, a, b, p):
+    """Whether patch ``p`` (one of ``a``'s) is also one of ``b``'s: a patch the edge a–b lies in."""
+    for j in range(ptr[b], ptr[b + 1]):
+        if patches[j] == p:
+            return True
+    return False
+
+
+@njit(cache=True, parallel=True)
+def _allowed_ee(ee, ptr, patches, keys, count, out):
+    for k in prange(len(ee)):
+        a0, a1, b0, b1 = ee[k, 0], ee[k, 1], ee[k, 2], ee[k, 3]
+        ok = False
+        for i in range(ptr[a0], ptr[a0 + 1]):
+            p = patches[i]
+            if ok or not _on_edge(ptr, patches, a0, a1, p):
+                continue
+            for j in range(ptr[b0], ptr[b0 + 1]):
+                q = patches[j]
+                if _on_edge(ptr, patches, b0, b1, q) and _has(keys, p * count + q):
+                    ok = True
+                    break
+        out[k] = ok
+
+
+def allowed_vertex_triangle(regions, pairs, vertex, tri):
+    """(K,) bool: whether each vertex–triangle candidate has a patch of its vertex and the triangle's
+    patch among the patch ``pairs`` (sorted keys ``p · count + q`` of :meth:`Regions.touching`)."""
+    out = np.empty(len(vertex), np.bool_)
+    if len(vertex):
+        _allowed_vt(np.ascontiguousarray(vertex, np.int64), np.ascontiguousarray(tri, np.int64), regions.face_patch,
+                    regions.vertex_patch_ptr, regions.vertex_patches, pairs, regions.count, out)
+    return out
+
+
+def allowed_edge_edge(regions, pairs, ee):
+    """(K,) bool: whether each edge–edge candidate ((K, 4) end vertices) has a patch of each edge
+    (one holding both its ends) making one of the patch ``pairs``."""
+    out = np.empty(len(ee), np.bool_)
+    if len(ee):
+        _allowed_ee(np.ascontiguousarray(ee, np.int64), regions.vertex_patch_ptr, regions.vertex_patches, pairs,
+                    regions.count, out)
+    return out
+
+
 class Regions:
     """The patches of a cloth mesh ``faces`` ((F, 3), ``n`` vertices), cut from positions ``x`` by
     panel (``group``, (F,)) and cubes of ``size`` [m]."""
@@ -72,6 +151,10 @@ class Regions:
         corner_keys = unique_ints(np.repeat(patch, 3).astype(np.int64) * max(self.n, 1) + self.faces.ravel())
         self._patch_vertices = corner_keys % max(self.n, 1)
         self._patch_vertex_starts = np.searchsorted(corner_keys // max(self.n, 1), np.arange(self.count))
+        # each vertex's patches (CSR, sorted): a pair's patches (allowed_vertex_triangle, allowed_edge_edge)
+        vertex_keys = unique_ints(self.faces.ravel().astype(np.int64) * max(self.count, 1) + np.repeat(patch, 3))
+        self.vertex_patches = vertex_keys % max(self.count, 1)
+        self.vertex_patch_ptr = np.searchsorted(vertex_keys // max(self.count, 1), np.arange(self.n + 1)).astype(np.int64)
         # patches sharing a vertex are neighbours
         near = _shared_vertex_pairs(self.faces.ravel(), np.repeat(patch, 3), self.count)
         # neighbours of neighbours too: patches whose corners merely touch are not a fold either
@@ -81,23 +164,18 @@ class Regions:
         a2 = (a @ a).tocoo()
         self._adjacent = np.unique(a2.row.astype(np.int64) * self.count + a2.col)
 
-    def active_faces(self, x, vertex_boxes, pad: float):
-        """Faces of the patches that can touch themselves or one another, at ``x`` or, with
-        ``vertex_boxes`` (lo, hi) per vertex, anywhere in them; patch boxes grown by ``pad``."""
-        corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
+    def touching(self, x, vertex_boxes, pad: float):
+        """(faces of the patches that can touch themselves or one another, sorted keys ``p · count + q``
+        of the patch pairs that can touch, both ways, ``p · count + p`` for a patch folded on itself),
+        at ``x`` or, with ``vertex_boxes`` (lo, hi) per vertex, anywhere in them; patch boxes grown by
+        ``pad``."""
         lo, hi = (x, x) if vertex_boxes is None else vertex_boxes
         lo = np.minimum.reduceat(lo[self._patch_vertices], self._patch_vertex_starts)
         hi = np.maximum.reduceat(hi[self._patch_vertices], self._patch_vertex_starts)
-        e1 = corners[:, 1] - corners[:, 0]
-        e2 = corners[:, 2] - corners[:, 0]
-        fn = np.cross(e1, e2)  # area-weighted normals
-        mean = np.add.reduceat(fn, self._starts)
-        mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
-        unit = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
-        cos_face = np.einsum("ij,ij->i", unit, np.repeat(mean, np.diff(np.append(self._starts, len(unit))), axis=0))
-        spread = np.arccos(np.clip(np.minimum.reduceat(cos_face, self._starts), -1.0, 1.0))  # cone half-angle
+        mean, spread = self._cones(x)
         limit = math.acos(FOLDED_COS)
         active = spread > limit
+        keys = [np.flatnonzero(active) * (self.count + 1)]
         i, j = overlapping_boxes(lo - pad, hi + pad)
         if len(i):
             key = np.minimum(i, j) * self.count + np.maximum(i, j)
@@ -105,7 +183,18 @@ class Regions:
             between = np.arccos(np.clip(np.einsum("ij,ij->i", mean[i], mean[j]), -1.0, 1.0))
             folded = 0.5 * between + np.maximum(spread[i], spread[j]) > limit
             hit = ~adjacent | folded
-            active[i[hit]] = True
-            active[j[hit]] = True
-        return np.flatnonzero(active[self.face_patch])
+            i, j = i[hit], j[hit]
+            active[i] = True
+            active[j] = True
+            keys += [i * self.count + j, j * self.count + i]
+        return np.flatnonzero(active[self.face_patch]), unique_ints(np.concatenate(keys).astype(np.int64))
 
+    def _cones(self, x):
+        """Each patch's normal cone at ``x``: (unit mean normals (P, 3), half-angles (P,) [rad])."""
+        corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
+        fn = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])  # area-weighted normals
+        mean = np.add.reduceat(fn, self._starts)
+        mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
+        unit = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+        cos_face = np.einsum("ij,ij->i", unit, np.repeat(mean, np.diff(np.append(self._starts, len(unit))), axis=0))
+        return mean, np.arccos(np.clip(np.minimum.reduceat(cos_face, self._starts), -1.0, 1.0))
