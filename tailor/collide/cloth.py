@@ -60,7 +60,7 @@ from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_
                             touching, touching_vt, unique_ints)
 from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .layers import Layers
-from .regions import PATCH_EDGES, PATCH_MIN, Regions, allowed_edge_edge, allowed_vertex_triangle, in_sorted
+from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers"]
 
@@ -221,7 +221,7 @@ class SelfCollider:
             moving = moving.copy()
             moving[self.faces[faces[~self._active[faces]]].ravel()] = True
             if pairs is not None and self._pairs is not None:
-                moving[self._patch_vertices(np.setdiff1d(pairs, self._pairs, assume_unique=True))] = True
+                moving[self.regions.vertices_of(np.setdiff1d(pairs, self._pairs, assume_unique=True))] = True
                 pairs = np.union1d(pairs, self._pairs)
             dirty = moving
             self._active[faces] = True
@@ -245,21 +245,12 @@ class SelfCollider:
             faces = faces[~self._left_out[self.faces[faces]].all(axis=1)]
         return faces, pairs
 
-    def _patch_vertices(self, pairs):
-        """(N,) bool: the vertices of the patches in the patch ``pairs`` (keys ``p · count + q``)."""
-        count = self.regions.count
-        patches = np.zeros(count, bool)
-        patches[pairs // count] = patches[pairs % count] = True
-        out = np.zeros(self.n, bool)
-        out[self.faces[patches[self.regions.face_patch]].ravel()] = True
-        return out
-
     def _in_touching_patches(self, vertex, tri, ee):
         """(vertex–triangle, edge–edge) candidates kept: those of patch pairs that can touch."""
         if self._pairs is None:
             return np.ones(len(vertex), bool), np.ones(len(ee), bool)
-        return (allowed_vertex_triangle(self.regions, self._pairs, vertex, tri),
-                allowed_edge_edge(self.regions, self._pairs, ee))
+        return (self.regions.allowed_vertex_triangle(self._pairs, vertex, tri),
+                self.regions.allowed_edge_edge(self._pairs, ee))
 
     def _find(self, x, lo, hi, faces, dirty, *, exact):
         """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the

@@ -10,7 +10,8 @@ argument). Flat cloth is skipped (:class:`~tailor.collide.cloth.SelfCollider`, `
 The same test decides which *pairs* of patches may touch (:meth:`Regions.touching`): a patch may
 touch itself only if folded, and another patch only if their boxes meet and they are not a
 neighbourhood that is a height field together. A candidate pair of primitives is kept only if a
-patch of each makes such a pair (:func:`allowed_vertex_triangle`, :func:`allowed_edge_edge`): a
+patch of each makes such a pair (:meth:`Regions.allowed_vertex_triangle`,
+:meth:`Regions.allowed_edge_edge`): a
 sleeve's patch near the torso touches the torso, not its own flat neighbours; two garments of an
 outfit lying one over the other touch each other, not themselves.
 """
@@ -26,7 +27,7 @@ from numba import njit, prange
 from .cloth_kernels import unique_ints
 from .grid import overlapping_boxes
 
-__all__ = ["Regions", "in_sorted", "allowed_vertex_triangle", "allowed_edge_edge", "FOLDED_COS", "PATCH_EDGES", "PATCH_MIN"]
+__all__ = ["Regions", "in_sorted", "FOLDED_COS", "PATCH_EDGES", "PATCH_MIN"]
 
 FOLDED_COS = 0.5
 """A patch (or two neighbouring patches) whose normals spread wider than 60° may touch itself."""
@@ -111,26 +112,6 @@ def _allowed_ee(ee, ptr, patches, keys, count, out):
         out[k] = ok
 
 
-def allowed_vertex_triangle(regions, pairs, vertex, tri):
-    """(K,) bool: whether each vertex–triangle candidate has a patch of its vertex and the triangle's
-    patch among the patch ``pairs`` (sorted keys ``p · count + q`` of :meth:`Regions.touching`)."""
-    out = np.empty(len(vertex), np.bool_)
-    if len(vertex):
-        _allowed_vt(np.ascontiguousarray(vertex, np.int64), np.ascontiguousarray(tri, np.int64), regions.face_patch,
-                    regions.vertex_patch_ptr, regions.vertex_patches, pairs, regions.count, out)
-    return out
-
-
-def allowed_edge_edge(regions, pairs, ee):
-    """(K,) bool: whether each edge–edge candidate ((K, 4) end vertices) has a patch of each edge
-    (one holding both its ends) making one of the patch ``pairs``."""
-    out = np.empty(len(ee), np.bool_)
-    if len(ee):
-        _allowed_ee(np.ascontiguousarray(ee, np.int64), regions.vertex_patch_ptr, regions.vertex_patches, pairs,
-                    regions.count, out)
-    return out
-
-
 class Regions:
     """The patches of a cloth mesh ``faces`` ((F, 3), ``n`` vertices), cut from positions ``x`` by
     panel (``group``, (F,)) and cubes of ``size`` [m]."""
@@ -151,10 +132,10 @@ class Regions:
         corner_keys = unique_ints(np.repeat(patch, 3).astype(np.int64) * max(self.n, 1) + self.faces.ravel())
         self._patch_vertices = corner_keys % max(self.n, 1)
         self._patch_vertex_starts = np.searchsorted(corner_keys // max(self.n, 1), np.arange(self.count))
-        # each vertex's patches (CSR, sorted): a pair's patches (allowed_vertex_triangle, allowed_edge_edge)
+        # each vertex's patches (CSR, sorted): a candidate pair's patches (allowed_vertex_triangle, allowed_edge_edge)
         vertex_keys = unique_ints(self.faces.ravel().astype(np.int64) * max(self.count, 1) + np.repeat(patch, 3))
-        self.vertex_patches = vertex_keys % max(self.count, 1)
-        self.vertex_patch_ptr = np.searchsorted(vertex_keys // max(self.count, 1), np.arange(self.n + 1)).astype(np.int64)
+        self._vertex_patches = vertex_keys % max(self.count, 1)
+        self._vertex_patch_ptr = np.searchsorted(vertex_keys // max(self.count, 1), np.arange(self.n + 1)).astype(np.int64)
         # patches sharing a vertex are neighbours
         near = _shared_vertex_pairs(self.faces.ravel(), np.repeat(patch, 3), self.count)
         # neighbours of neighbours too: patches whose corners merely touch are not a fold either
@@ -188,6 +169,32 @@ class Regions:
             active[j] = True
             keys += [i * self.count + j, j * self.count + i]
         return np.flatnonzero(active[self.face_patch]), unique_ints(np.concatenate(keys).astype(np.int64))
+
+    def allowed_vertex_triangle(self, pairs, vertex, tri):
+        """(K,) bool: whether each vertex–triangle candidate has a patch of its vertex and the triangle's
+        patch among the patch ``pairs`` (sorted keys ``p · count + q``, :meth:`touching`)."""
+        out = np.empty(len(vertex), np.bool_)
+        if len(vertex):
+            _allowed_vt(np.ascontiguousarray(vertex, np.int64), np.ascontiguousarray(tri, np.int64), self.face_patch,
+                        self._vertex_patch_ptr, self._vertex_patches, pairs, self.count, out)
+        return out
+
+    def allowed_edge_edge(self, pairs, ee):
+        """(K,) bool: whether each edge–edge candidate ((K, 4) end vertices) has a patch of each edge
+        (one holding both its ends) making one of the patch ``pairs``."""
+        out = np.empty(len(ee), np.bool_)
+        if len(ee):
+            _allowed_ee(np.ascontiguousarray(ee, np.int64), self._vertex_patch_ptr, self._vertex_patches, pairs,
+                        self.count, out)
+        return out
+
+    def vertices_of(self, pairs):
+        """(N,) bool: the vertices of the patches in the patch ``pairs`` (keys ``p · count + q``)."""
+        patches = np.zeros(self.count, bool)
+        patches[pairs // self.count] = patches[pairs % self.count] = True
+        out = np.zeros(self.n, bool)
+        out[self.faces[patches[self.face_patch]].ravel()] = True
+        return out
 
     def _cones(self, x):
         """Each patch's normal cone at ``x``: (unit mean normals (P, 3), half-angles (P,) [rad])."""
