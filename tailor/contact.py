@@ -107,6 +107,23 @@ class Attachments:
         return Attachments(ids[ok], self.tri[ok], self.bary[ok], self.offset[ok], self.faces)
 
 
+class Gather:
+    """Vertices carried in a straight line from ``start`` to ``target`` over ``duration`` s from time
+    ``t0``, then held there (they are pinned in the model meanwhile): an inner garment's cloth
+    gathered onto the body under a band about to close over it (a tucked top, :func:`tailor.outfit.outfit`).
+    ``ids`` are mesh vertices, numbered by ``weld``."""
+
+    def __init__(self, ids, start, target, t0: float, duration: float, weld):
+        self.ids, first = np.unique(weld[ids], return_index=True)
+        self.start, self.target = np.asarray(start)[first], np.asarray(target)[first]
+        self.t0, self.duration = float(t0), float(duration)
+
+    def apply(self, state, body_x, body_v) -> None:
+        a = min(1.0, max(0.0, (state.t - self.t0) / self.duration))
+        state.x[self.ids] = self.start + a * (self.target - self.start)
+        state.v[self.ids] = (self.target - self.start) / self.duration if a < 1.0 else 0.0
+
+
 class HeightHold:
     """Vertices kept at their heights while free to slide across (an attachment while sewing), and
     the rest of their panels kept from rising above them.

@@ -49,18 +49,27 @@ meeting it edge to edge. Two held top edges at one height lie within one thickne
 held there, and as the body moves they cross where no contact can part them (docs/outfits.md,
 "Held a layer apart")."""
 
-def outfit(patterns, *, name: str | None = None) -> Pattern:
+def _held_at_waist(pattern: Pattern) -> bool:
+    """Whether ``pattern`` is a bottom: held to the body's waist (trousers, a skirt)."""
+    return any(a.target == "waist" for a in pattern.attachments)
+
+
+def outfit(patterns, *, name: str | None = None, tuck: bool = False) -> Pattern:
     """One pattern dressing ``patterns`` together, innermost first (see the module).
 
-    A single pattern is returned as it is. Garments with one name are told apart as ``NAME``,
-    ``NAME-2`` …. Raises PatternError for an empty list.
+    With ``tuck``, a top's hem goes inside the waistband of a bottom of its layer: garments held at
+    the waist go outside those that are not, and such a garment's :class:`~tailor.pattern.Piece`
+    ``tucks``: the cloth inside it below its top edge is gathered onto the body before it sews
+    (:func:`tailor.dress.phases.sew`). A single pattern is returned as it is. Garments with one
+    name are told apart as ``NAME``, ``NAME-2`` …. Raises PatternError for an empty list.
     """
     patterns = list(patterns)
     if not patterns:
         raise PatternError("an outfit needs at least one pattern")
     if len(patterns) == 1:
         return patterns[0]
-    order = sorted(range(len(patterns)), key=lambda i: (patterns[i].layer, i))
+    bottom = [tuck and _held_at_waist(p) for p in patterns]
+    order = sorted(range(len(patterns)), key=lambda i: (patterns[i].layer, bottom[i], i))
     names = _unique([patterns[i].name for i in order])
     panels, seams, attachments, pieces = [], [], [], []
     room = 0.0  # how far out the garments placed so far reach
@@ -71,7 +80,8 @@ def outfit(patterns, *, name: str | None = None) -> Pattern:
         landmarks = {a.target for a in p.attachments}
         rise = ATTACH_RISE * sum(1 for inner in held if inner & landmarks)
         held.append(landmarks)
-        pieces.append(Piece(garment, len(panels), len(p.panels), p.layer, extra, rise=rise))
+        tucks = bottom[i] and any(not bottom[j] for j in order[:len(pieces)])
+        pieces.append(Piece(garment, len(panels), len(p.panels), p.layer, extra, rise=rise, tucks=tucks))
         panels += [replace(q, name=f"{garment}/{q.name}", fabric=q.fabric or p.fabric, placement=_raised(q.placement, rise))
                    for q in p.panels]
         seams += [_renamed_seam(s, garment, len(seams) + k) for k, s in enumerate(p.seams)]

@@ -240,3 +240,45 @@ def test_a_t_shirt_over_a_dress_keeps_its_layer(resolution, frames):
     assert max(report.crossings_per_frame) == 0
     assert report.max_penetration_m <= 0.001
     assert max(report.out_of_layer_per_frame) <= 10
+
+
+def test_tuck_puts_the_top_inside_the_bottom_that_tucks_it():
+    """``tuck``: the garment held at the waist goes outside the top, and tucks it; without, as listed."""
+    tucked = outfit(_patterns("trousers", "tshirt"), tuck=True)
+    assert [(p.name, p.tucks) for p in tucked.pieces] == [("tshirt", False), ("trousers", True)]
+    plain = outfit(_patterns("trousers", "tshirt"))
+    assert [(p.name, p.tucks) for p in plain.pieces] == [("trousers", False), ("tshirt", False)]
+
+
+def test_tuck_needs_a_top_and_a_bottom(tmp_path, capsys):
+    argv = ["-q", "drape", str(PANELS / "tshirt.json"), "--tuck", "--out", str(tmp_path / "run")]
+    assert main(argv) == 2
+    assert "--tuck" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_tucked_t_shirt_walks_inside_the_trousers_band(tmp_path):
+    """``--tuck``: the T-shirt's hem is gathered onto the body before the trousers' band closes over
+    it; walking, no crossing, and where the two overlap (the hem under the band) no trouser vertex
+    is nearer the body than the T-shirt's: the T-shirt is the inner layer there."""
+    out = tmp_path / "run"
+    argv = ["-q", "drape", str(PANELS / "trousers.json"), str(PANELS / "tshirt.json"), "--tuck", "--body",
+            "mannequin-walk", "--frames", "2", "--resolution", "4", "--with-body", "--out", str(out)]
+    assert main(argv) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert list(report["garments"]) == ["tshirt", "trousers"]
+    assert max(report["crossings_per_frame"]) == 0 and report["max_penetration_m"] <= 0.001
+    assert max(report["out_of_layer_per_frame"]) <= 2
+    mesh = read_obj(out / "garment_0001.obj")
+    x = read_obj_vertices(out / "garment_0001.obj")
+    trousers = np.asarray([g.startswith("trousers/") for g in mesh.group_names])[mesh.face_group]
+    garment = np.zeros(len(x), np.intp)
+    garment[np.unique(mesh.faces[trousers])] = 1
+    body = read_obj(out / "body_0001.obj")
+    assert out_of_order(x, garment, body.vertices, body.faces)[0, 1] <= 2
+    # the hem really is under the band: T-shirt vertices below the trousers' top, near trouser cloth
+    band_top = x[garment == 1, 2].max()
+    tucked = np.flatnonzero((garment == 0) & (x[:, 2] < band_top - 0.02))
+    from scipy.spatial import cKDTree
+    d, _ = cKDTree(x[garment == 1]).query(x[tucked])
+    assert np.count_nonzero(d < 0.03) > 30

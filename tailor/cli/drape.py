@@ -47,7 +47,9 @@ def _cmd_drape(args) -> int:
     body = read_body(args.body, units=args.units, up=args.up, facing=args.facing, base=args.base, fps=args.body_fps)
     if args.grade == "auto":
         patterns = [_graded(p, body, args.design_body)[0] for p in patterns]
-    pattern = outfit(patterns)
+    if args.tuck and len(patterns) < 2:
+        raise TailorError("--tuck tucks a top into a bottom's waistband: give both patterns")
+    pattern = outfit(patterns, tuck=args.tuck)
     bars = PhaseBars(disable=args.quiet)
     t0 = time.perf_counter()
     try:
@@ -167,6 +169,8 @@ def add_drape_command(sub) -> None:
     d.add_argument("--grade", choices=["none", "auto"], default="none",
                    help="auto: resize the pattern to the body first (its girths across, its lengths along)")
     d.add_argument("--design-body", default="mannequin", metavar="BODY|YAML", help="the body the pattern was drafted for: a body file or name, or a GarmentCode measurement YAML (default: mannequin, GarmentCode's mean body)")
+    d.add_argument("--tuck", action="store_true",
+                   help="an outfit's top tucked into its trousers' or skirt's waistband instead of over it")
     d.add_argument("--fabric", choices=fabric_names(), help="override the pattern's fabric")
     d.add_argument("--frames", type=int, default=25, help="frames after dressing (default 25)")
     d.add_argument("--fps", type=float, default=25.0)

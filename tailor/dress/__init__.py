@@ -18,6 +18,7 @@ import numpy as np
 
 from ..collide import BodyCollider, InsideTest, edge_crossings
 from ..contact import ContactPipeline, body_margin
+from ..errors import SimulationError
 from ..integrators import make_integrator
 from ..measure import measure_body
 from ..mesh import discretise
@@ -38,14 +39,14 @@ __all__ = ["drape", "prepare", "DrapeResult", "DrapeReport", "DrapeProgress", "D
 
 
 def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: DrapeOptions | None = None,
-          **kwargs) -> DrapeResult:
+          tuck: bool = False, **kwargs) -> DrapeResult:
     """Dress ``body`` in ``pattern`` and animate it.
 
     Parameters
     ----------
     pattern : Pattern or list of Pattern
         A list dresses an outfit: the garments together, innermost first or by their ``layer``
-        (:func:`tailor.outfit.outfit`).
+        (:func:`tailor.outfit.outfit`); with ``tuck``, a top's hem inside a bottom's waistband.
     body : Body
         Static or moving (:func:`tailor.io.body_files.read_body`).
     fabric : Fabric or str, optional
@@ -79,7 +80,10 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
     """
     t_start = time.perf_counter()
     if isinstance(pattern, (list, tuple)):
-        pattern = outfit(pattern)
+        pattern = outfit(pattern, tuck=tuck)
+    elif tuck:
+        raise SimulationError("tuck applies to a list of patterns (a top and a bottom), or make the outfit with "
+                              "tailor.outfit(patterns, tuck=True)")
     opts = options or DrapeOptions(fabric=fabric, **kwargs)
     if options is not None and (fabric is not None or kwargs):
         opts = replace(options, **kwargs, **({"fabric": fabric} if fabric is not None else {}))

@@ -77,6 +77,7 @@ class Garment:
         self.friction = self._panel_friction[mesh.vertex_panel]
         self.pins = np.zeros(0, np.intp)  # mesh vertices held to the body
         self.waiting = np.zeros(0, np.intp)  # mesh vertices of an outfit's garments not sewing yet, held where placed
+        self.gathered = np.zeros(0, np.intp)  # mesh vertices tucked under a band while it sews, carried by a Gather
         self.gravity = False
         self.rebuilds = 0
         self.cloth: TearableCloth | None = None
@@ -114,7 +115,7 @@ class Garment:
         xw, vw = merge_state(x_orig, v_orig, self.mass, new)
         m = build_model(self.mesh, self.fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
                         gravity=(0.0, 0.0, -GRAVITY if self.gravity else 0.0))
-        held = np.union1d(self.pins, self.waiting)
+        held = np.union1d(np.union1d(self.pins, self.waiting), self.gathered)
         if len(held):
             m = m.with_pins(np.unique(new[held]))
         if self.sewing.open_count:
@@ -196,6 +197,7 @@ class Garment:
         Returns (state of the rebuilt model, :class:`~tailor.contact.Attachments` or None)."""
         ids = self.attached
         self.gravity = True
+        self.gathered = np.zeros(0, np.intp)  # a tucked garment's gathered cloth is free again, under the band
         if len(ids):
             dist, tri, bary, _ = collider.nearest(state.x[self.weld[ids]], pose, 0, cache=False)
             ok = tri >= 0

@@ -219,3 +219,12 @@ class DrapeOptions:
     @staticmethod
     def _fail(name, value, expected):
         raise SimulationError(f"drape option {name} must be {expected}, got {value!r}")
+
+TUCK_BELOW = 0.02
+"""A tuck gathers the inner garments' cloth lower than this [m] above the tucking band's top edge."""
+TUCK_GATHER_TIME = 0.2
+"""[s] of sewing over which a tuck's cloth is carried onto the body (at once, rows fold over each other)."""
+TUCK_ROW = 0.02
+"""[m] Height of the rows whose loop centre a tuck draws the cloth toward."""
+TUCK_REACH = 0.2
+"""[m] How far from the surface a tuck looks for the body under the cloth it draws in."""

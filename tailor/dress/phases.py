@@ -21,13 +21,14 @@ from functools import partial
 
 import numpy as np
 
-from ..contact import HeightHold, LimbWallContact
+from ..contact import Gather, HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
+from ..outfit import garment_of_vertex
 from ..sim import Guard, Stepper, max_stretch
 from .options import (BLOCKED_OVER, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
-                      ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, WELD_BATCH, DrapeOptions,
-                      PhaseSettings)
+                      ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
+                      TUCK_REACH, TUCK_ROW, WELD_BATCH, DrapeOptions, PhaseSettings)
 from .report import DrapeProgress, PhaseReport
 
 __all__ = ["Dressing", "sew", "settle", "transition", "animate", "rms_speed"]
@@ -48,6 +49,7 @@ class Dressing:
         self.walls, self.attachments = walls, None
         self.placer = placer  # ``placer(x, garment)``: an outfit's garment dressed over the inner ones (dress.Placer)
         self.held_heights = None  # (mesh vertices, heights [m], under, ceilings [m]) of the attachments while sewing
+        self.gathering = None  # (mesh vertices, start, target, t0 [s]) of a tuck's gather while the band sews
         self.integrator, self.quality = integrator, quality
         self.stepper = Stepper(integrator, contacts=contacts)
         self.on_frame, self.progress = on_frame, progress
@@ -69,7 +71,10 @@ class Dressing:
         if self.held_heights is not None:
             ids, heights, under, ceilings = self.held_heights
             held = HeightHold(ids, heights, g.weld, under, ceilings)
-        self.contacts.constrain(walls, self.attachments, held)
+        gather = None
+        if self.gathering is not None:
+            gather = Gather(*self.gathering, TUCK_GATHER_TIME, g.weld)
+        self.contacts.constrain(walls, self.attachments, held, gather)
         waiting = np.zeros(g.model.vertex_count, bool)
         waiting[g.weld[g.waiting]] = True
         self.contacts.wait(waiting)
@@ -211,13 +216,45 @@ def sew(d: Dressing, x0):
 
 def _dress_over(d: Dressing, state, garment: int):
     """An outfit's ``garment`` placed afresh over the garments inside it, now sewn (their sewn
-    shape is far tighter than their placement, which it waited outside of), before it sews."""
+    shape is far tighter than their placement, which it waited outside of), before it sews; if it
+    tucks them in, their cloth below its top edge is gathered onto the body (:func:`_gather`)."""
     if d.placer is None:
         return state
     g = d.garment
     ids = g.garment_vertices(garment)
     state = g.moved(state, ids, d.placer(g.frame(state), garment)[ids])
     d.contacts.forget()
+    if g.pattern.pieces[garment].tucks:
+        state = _gather(d, state, garment)
+    return state
+
+
+def _gather(d: Dressing, state, garment: int):
+    """A tuck: the inner garments' cloth lower than :data:`~.options.TUCK_BELOW` under the top edge of
+    ``garment`` (placed, about to sew) carried onto the body one thickness out over
+    :data:`~.options.TUCK_GATHER_TIME` s and held there while ``garment`` sews (let go when settling
+    attaches the outfit). Each point goes halfway to its height's axis (the centre of the inner
+    cloth's loop at that height, within the body) and back out to the surface: a top's hem is
+    drawn in round the hips as a hand tucks it, compressed along its loop, not folded."""
+    g = d.garment
+    x = g.frame(state)
+    inner = np.flatnonzero(garment_of_vertex(g.pattern, g.mesh.vertex_panel) < garment)
+    top = x[g.garment_vertices(garment), 2].max()
+    low = inner[x[inner, 2] < top + TUCK_BELOW]
+    if d.contacts.body is None or not len(low):
+        return state
+    band = np.floor(x[low, 2] / TUCK_ROW).astype(np.int64)
+    _, row = np.unique(band, return_inverse=True)
+    centre = np.stack([np.bincount(row, x[low, k]) / np.bincount(row) for k in range(2)], axis=1)[row]
+    inward = x[low].copy()
+    inward[:, :2] = 0.5 * (inward[:, :2] + centre)
+    found, _, _, out = d.contacts.body.push_out(inward, d.timeline.pose, 0, clearance=g.thickness, reach=TUCK_REACH)
+    low, target = low[found], out
+    g.gathered = low
+    d.gathering = (low, x[low], target, float(state.t))
+    state = g.rebuild(state)
+    d.contacts.follow(g.friction, state.x)
+    d.constrain()
     return state
 
 
@@ -251,7 +288,7 @@ def settle(d: Dressing, state):
     most, ending early once it is still (:data:`~.options.REST_SPEED`)."""
     t0 = time.perf_counter()
     state, d.attachments = d.garment.attach(state, d.contacts.body, d.timeline.pose)
-    d.held_heights = None
+    d.held_heights = d.gathering = None
     d.contacts.follow(d.garment.friction, state.x)
     d.constrain()
     d.enter(SETTLING)
