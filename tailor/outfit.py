@@ -21,6 +21,10 @@ handles one garment:
   (:meth:`tailor.dress.garment.Garment.sew_stage`); at its stage each is placed afresh, at its own
   clearance, over the sewn garments inside it (``place_panels(..., garment=k)``). Each panel keeps
   its own garment's fabric.
+* **Tucked** (``outfit(..., tuck=True)``): a top's hem inside a bottom's waistband. The garments held
+  at the waist go outside the top, and when such a garment is placed over the sewn top, the top's
+  cloth its band will cover is gathered onto the body and held there while the band sews
+  (:func:`tailor.dress.phases.sew`), then let go under the band.
 * **Contact between garments** is self-contact of the outfit's one mesh: perfectly inelastic
   (Carignan Eq. 5–8), over the same broad and narrow phases (:mod:`tailor.collide.cloth`), with
   the layer rule as a one-sided constraint once sewn (:class:`~tailor.collide.Layers`): a pair of
