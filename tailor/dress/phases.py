@@ -230,7 +230,7 @@ def _dress_over(d: Dressing, state, garment: int):
 
 
 def _gather(d: Dressing, state, garment: int):
-    """A tuck: the inner garments' cloth lower than :data:`~.options.TUCK_BELOW` under the top edge of
+    """A tuck: the inner garments' cloth lower than :data:`~.options.TUCK_BELOW` above the top edge of
     ``garment`` (placed, about to sew) carried onto the body one thickness out over
     :data:`~.options.TUCK_GATHER_TIME` s and held there while ``garment`` sews (let go when settling
     attaches the outfit). Each point goes halfway to its height's axis (the centre of the inner
