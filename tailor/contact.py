@@ -161,10 +161,11 @@ class LimbWallContact:
     as the body moves (:func:`~tailor.limbwalls.limb_walls`): inelastic, like a body contact.
 
     ``walls`` are the garment's :class:`~tailor.limbwalls.LimbWalls`; ``mesh`` and ``weld`` number
-    its vertices (a welded vertex whose members agree on one wall keeps to it).
+    its vertices (a welded vertex whose members agree on one wall keeps to it); only the first
+    ``simulated`` of them are (default: all; an outfit's garments waiting to sew come last).
     """
 
-    def __init__(self, walls, mesh, weld, thickness: float):
+    def __init__(self, walls, mesh, weld, thickness: float, *, simulated: int | None = None):
         self.walls, self.thickness = walls, thickness
         nw = int(weld.max()) + 1
         lo, hi = np.full(nw, walls.count), np.full(nw, -1)
@@ -172,6 +173,8 @@ class LimbWallContact:
         np.minimum.at(lo, weld, of)
         np.maximum.at(hi, weld, of)
         self.ids = np.flatnonzero((lo == hi) & (hi >= 0))
+        if simulated is not None:
+            self.ids = self.ids[self.ids < simulated]
         self.which = hi[self.ids]
 
     def apply(self, state, body_x, body_v) -> None:
@@ -262,7 +265,6 @@ class ContactPipeline:
         self._self: SelfCollider | None = None
         self._self_key = None
         self._rings = None  # (numbering, each vertex's neighbours) for untangling
-        self._waiting = None  # (N,) bool: an outfit's garments waiting outside to sew, out of the self-collision
         self._start = None  # (N, 3) where the next step starts after a renumbering (follow), for the self-collider
         self._layer_thickness = None  # (numbering, (N,) body thickness per vertex) of an outfit
 
@@ -273,12 +275,6 @@ class ContactPipeline:
     def constrain(self, *constraints) -> None:
         """Constraints applied before the body each step (``apply(state, body_x, body_v)``): limb walls, attachments."""
         self.constraints = tuple(c for c in constraints if c is not None)
-
-    def wait(self, waiting) -> None:
-        """``waiting`` ((N,) bool over the current numbering, or None): an outfit's garments waiting
-        outside, pinned, while the one inside sews; the self-collision leaves them out (they are
-        placed afresh, clear of it, before they sew)."""
-        self._waiting = None if waiting is None or not np.any(waiting) else np.asarray(waiting, bool)
 
     def follow(self, friction, x=None) -> None:
         """The cloth's vertices were welded or moved between steps (their count changed; the colliders
@@ -332,9 +328,8 @@ class ContactPipeline:
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x, bx)
             collider.ignore(*self._open_seams(model))
-            collider.leave_out(self._waiting if self._waiting is not None and len(self._waiting) == model.vertex_count else None)
-            # pinned (attached, or an outfit's garment waiting to sew) vertices do not move: read each
-            # step, since pins change without the vertex count changing
+            # pinned vertices (attached, an outfit's sewn garments while the next sews) do not move:
+            # read each step, since pins change without the vertex count changing
             collider.respond(np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass)), state, dt)
 
     def _open_seams(self, model):

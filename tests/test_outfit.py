@@ -92,6 +92,56 @@ def test_an_outer_garment_is_dressed_over_the_inner_one_as_it_lies():
     assert len(edge_crossings(x, mesh.faces)) == 0 and out_of_order(x, garment, body.vertices, body.faces)[0, 1] == 0
 
 
+def test_a_sewing_stage_simulates_its_garment_the_inner_ones_held_still_the_outer_ones_left_out():
+    """Trousers sewing while the T-shirt waits: the model is the trousers' alone (the T-shirt's
+    vertices, the last of the numbering, cost nothing) and the T-shirt stays where it was placed;
+    the T-shirt sewing over the sewn trousers: both simulated, where the T-shirt waited, and
+    momentum still conserved by the merges of the T-shirt's seams."""
+    body = read_body("mannequin")
+    pattern = outfit(_patterns("trousers", "tshirt"))
+    d, _, x0 = prepare(pattern, body, DrapeOptions(resolution=0.04))
+    g = d.garment
+    trousers, tshirt = g.garment_vertices(0), g.garment_vertices(1)
+    first, second = g.stage_plan()
+    state = g.sew_stage(g.model.state(x0), first)
+    assert g.model.vertex_count == len(np.unique(g.weld[trousers])) < len(x0)
+    assert not g.model.vertex_pinned.any()
+    state.x += 0.01  # the trousers move; the T-shirt waits where it was placed
+    np.testing.assert_allclose(g.frame(state)[tshirt], x0[tshirt])
+    np.testing.assert_allclose(g.frame(state)[trousers], x0[trousers] + 0.01)
+    state.v[:] = 0.3
+    g.sewing.merged[first.sewing] = True  # the trousers sewn
+    state = g.sew_stage(state, second)
+    assert g.model.vertex_count == len(np.unique(g.weld)) and not g.model.vertex_pinned.any()
+    np.testing.assert_allclose(g.frame(state)[tshirt], x0[tshirt])
+    assert np.abs(state.v[g.weld[tshirt]]).max() == 0.0 and np.allclose(state.v[g.weld[trousers]], 0.3)
+    mass = np.asarray(g.model.vertex_mass)
+    momentum = (mass[:, None] * state.v).sum(axis=0)
+    g.sewing.merged[second.sewing] = True
+    state = g.rebuild(state)
+    np.testing.assert_allclose((np.asarray(g.model.vertex_mass)[:, None] * state.v).sum(axis=0), momentum, rtol=1e-12)
+
+
+def test_a_model_of_its_first_vertices_keeps_their_elements_and_refuses_a_cut_through_a_triangle():
+    from tailor.mesh import discretise
+    from tailor.model import build_model
+
+    pattern = outfit(_patterns("trousers", "tshirt"))
+    mesh = discretise(pattern, 0.06)
+    model = build_model(mesh, pattern.fabric)
+    count = len(np.flatnonzero(garment_of_vertex(pattern, mesh.vertex_panel) == 0))
+    part = model.prefix(count)
+    inner = garment_of_vertex(pattern, model.face_panel) == 0
+    assert part.vertex_count == count and part.face_count == inner.sum() < model.face_count
+    np.testing.assert_array_equal(part.faces, model.faces[inner])
+    np.testing.assert_array_equal(part.face_stretch_warp, model.face_stretch_warp[inner])
+    assert len(part.hinge_vertices) and part.hinge_vertices.max() < count and part.spring_vertices.max() < count
+    assert part.total_mass == pytest.approx(model.vertex_mass[:count].sum())
+    assert model.prefix(model.vertex_count) is model
+    with pytest.raises(ValueError, match="joins"):
+        model.prefix(int(model.faces[0].max()))
+
+
 def test_an_outer_loop_is_eased_to_keep_its_own_ease_over_the_inner_loop():
     """A skirt's waist (88 cm on an 84.3 cm waist) over trousers' band of 88 cm goes round that band
     one layer further out with its own ease: 88 + 2π·spacing + 3.7 cm, its panels widened across

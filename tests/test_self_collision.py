@@ -385,25 +385,6 @@ def test_flat_layers_lying_on_each_other_are_candidates_of_each_other_not_of_the
     assert found["auto"][2][upper, 2].min() > -0.45  # slowed: at 0.5 m/s it would have come within 0 of the lower
 
 
-def test_a_panel_left_out_is_neither_a_contact_nor_a_candidate_until_it_is_let_back_in():
-    """An outfit's garment waiting outside while the one inside sews is out of the self-collision:
-    a panel falling onto it passes (no contacts, no pairs with it), and is caught once it is back."""
-    model, x0 = stacked(0.006, 0.0, offset=0.0, size=0.1, resolution=0.02)
-    upper, lower = panel_vertices(model, 1), panel_vertices(model, 0)
-    v0 = np.zeros_like(x0)
-    v0[upper, 2] = -0.5
-    inv_mass = np.where(lower, 0.0, 1.0 / np.asarray(model.vertex_mass))  # the waiting panel is pinned
-    found = []
-    for waiting in (lower, None):
-        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
-        collider.leave_out(waiting)
-        state = model.state(x0.copy(), v0.copy())
-        found.append((collider.respond(inv_mass, state, 0.01), collider.candidate_pairs))
-    (out, out_pairs), (back, back_pairs) = found
-    assert out == 0 and back > 0
-    assert out_pairs < back_pairs  # the upper panel's own pairs only
-
-
 @pytest.mark.parametrize("mode", ["on", "auto"])
 def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair(mode):
     """A corner flapping over a still panel: the still panel keeps its candidates (partial queries

@@ -372,7 +372,7 @@ def _at(thickness, ids):
     return thickness if np.ndim(thickness) == 0 else np.asarray(thickness)[ids]
 
 
-GAP_REACH = (0.03, 0.15)
+GAP_REACH = (0.01, 0.02, 0.04, 0.15)
 """Radii [m] within which the body's nearest point is searched exactly, in turn; beyond the last
 a vertex's gap is its distance to the nearest body vertex."""
 

@@ -173,7 +173,6 @@ class SelfCollider:
         self._x_prev = None
         self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
         self._kept = None  # sorted vertex-pair keys that keep contact though ignored
-        self._left_out = None  # (N,) bool: vertices out of the simulation for now (an outfit's garment waiting to sew)
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1, "partial_queries": 0,
                       "query_s": 0.0, "response_s": 0.0}
 
@@ -214,7 +213,7 @@ class SelfCollider:
         if moving is not None:  # the others stay at their anchors
             still = ~moving
             lo, hi = np.where(still[:, None], self._anchor, lo), np.where(still[:, None], self._anchor, hi)
-        faces, pairs = self._active_now(rx, lo, hi)
+        faces, pairs = self._touching(rx, (lo, hi))
         dirty = None
         if moving is not None:
             # faces and patch pairs no query has seen: their vertices are queried as if they had moved
@@ -237,14 +236,6 @@ class SelfCollider:
         self._find(rx, lo, hi, faces, dirty, exact=rxp is None)
         self.stats["query_s"] += time.perf_counter() - t0
 
-    def _active_now(self, x, lo, hi):
-        """(the faces that take part now, without the left-out garments; the patch pairs that can
-        touch, :meth:`Regions.touching`, or None: every pair of those faces can)."""
-        faces, pairs = self._touching(x, (lo, hi))
-        if self._left_out is not None:
-            faces = faces[~self._left_out[self.faces[faces]].all(axis=1)]
-        return faces, pairs
-
     def _in_touching_patches(self, vertex, tri, ee):
         """(vertex–triangle, edge–edge) candidates kept: those of patch pairs that can touch."""
         if self._pairs is None:
@@ -256,8 +247,6 @@ class SelfCollider:
         """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the
         pairs touching a dirty vertex added to the kept ones that touch none."""
         verts = unique_ints(self.faces[faces].ravel())
-        if self._left_out is not None:
-            verts = verts[~self._left_out[verts]]
         radius = self.thickness + self.margin
         # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
         # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
@@ -321,15 +310,6 @@ class SelfCollider:
             keys = unique_ints(np.r_[p[:, 0] * self.n + p[:, 1], p[:, 1] * self.n + p[:, 0]])
         if not (_same_mask(mask, self._ignored) and _same_mask(keys, self._kept)):
             self._ignored, self._kept = mask, keys
-            self._anchor = None  # query again
-
-    def leave_out(self, vertices) -> None:
-        """From now on the ``vertices`` ((N,) bool, or None for none) are out of the self-collision
-        altogether, not even obstacles, and cost the broad phase nothing: an outfit's garments waiting
-        outside while the one inside sews (it is placed afresh over the sewn one before its own stage)."""
-        mask = None if vertices is None or not np.any(vertices) else np.asarray(vertices, bool)
-        if not _same_mask(mask, self._left_out):
-            self._left_out = mask
             self._anchor = None  # query again
 
     def _is_kept(self, a, b):

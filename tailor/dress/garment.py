@@ -27,8 +27,8 @@ __all__ = ["Garment", "Stage", "attachment_vertices"]
 @dataclass(frozen=True)
 class Stage:
     """One sewing stage (:meth:`Garment.stage_plan`): the pairs sewing (S,) bool, the mesh vertices
-    waiting pinned (those of the garments outside), the outfit's garment sewing and whether the
-    stage is its first (it is dressed over the garments inside it then)."""
+    waiting out of the simulation (those of the garments outside), the outfit's garment sewing and
+    whether the stage is its first (it is dressed over the garments inside it then)."""
 
     sewing: np.ndarray
     waiting: np.ndarray
@@ -76,7 +76,8 @@ class Garment:
         self.weld = np.arange(mesh.vertex_count)
         self.friction = self._panel_friction[mesh.vertex_panel]
         self.pins = np.zeros(0, np.intp)  # mesh vertices held to the body
-        self.waiting = np.zeros(0, np.intp)  # mesh vertices of an outfit's garments not sewing yet, held where placed
+        self.waiting = np.zeros(0, np.intp)  # mesh vertices of an outfit's garments not sewing yet: out of the model
+        self._parked = np.zeros((0, 3))  # positions of the waiting garments' simulated vertices (the last of the numbering)
         self.gathered = np.zeros(0, np.intp)  # mesh vertices tucked under a band while it sews, carried by a Gather
         self.gravity = False
         self.rebuilds = 0
@@ -90,8 +91,13 @@ class Garment:
         return layer_spacing(self.fabrics)
 
     def frame(self, state) -> np.ndarray:
-        """Positions of every mesh vertex (seam copies included), as frames are written."""
-        return state.x[self.weld]
+        """Positions of every mesh vertex (seam copies included), as frames are written; an outfit's
+        garments waiting to sew where they wait."""
+        return self._whole(state.x, self._parked)[self.weld]
+
+    @staticmethod
+    def _whole(a, parked):
+        return np.concatenate([a, parked]) if len(parked) else a
 
     def forces(self, wind=None):
         """``forces(model, state)``: the cloth's own (Eq. 1–4, wind) plus the open seams' pull (Eq. 15)."""
@@ -110,22 +116,44 @@ class Garment:
 
     def rebuild(self, state):
         """Weld the merged pairs into one particle each and carry the state over (Eq. 17–18)."""
-        x_orig, v_orig = state.x[self.weld], state.v[self.weld]
+        x_orig = self._whole(state.x, self._parked)[self.weld]
+        v_orig = self._whole(state.v, np.zeros_like(self._parked))[self.weld]
         new = self.sewing.weld_map(self.mesh.vertex_count)
         xw, vw = merge_state(x_orig, v_orig, self.mass, new)
         m = build_model(self.mesh, self.fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
                         gravity=(0.0, 0.0, -GRAVITY if self.gravity else 0.0))
-        held = np.union1d(np.union1d(self.pins, self.waiting), self.gathered)
+        held = np.union1d(self.pins, self.gathered)
         if len(held):
             m = m.with_pins(np.unique(new[held]))
         if self.sewing.open_count:
             pairs = self.sewing.open_pairs(new)
             m = m.with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
-        self.weld, self.model = new, m
-        self.friction = self._panel_friction[self.mesh.vertex_panel[np.unique(new, return_index=True)[1]]]
+        count = self._simulated(new)
+        self.weld, self.model, self._parked = new, m.prefix(count), xw[count:]
+        self.friction = self._panel_friction[self.mesh.vertex_panel[np.unique(new, return_index=True)[1]]][:count]
         self.rebuilds += 1
-        out = m.state(xw, vw, 0.0)
+        out = self.model.state(xw[:count], vw[:count], 0.0)
         out.t = state.t
+        return out
+
+    def _simulated(self, weld) -> int:
+        """How many of the welded vertices are simulated: all but the waiting garments', which
+        :func:`~tailor.outfit.outfit` numbers last (its pieces in layer order, innermost first)."""
+        n = int(weld.max()) + 1
+        if not len(self.waiting):
+            return n
+        count = int(weld[self.waiting].min())
+        live = np.ones(self.mesh.vertex_count, bool)
+        live[self.waiting] = False
+        if live.any() and int(weld[live].max()) >= count:
+            raise ValueError("an outfit's waiting garments must be numbered after the ones sewing")
+        return count
+
+    @property
+    def live(self) -> np.ndarray:
+        """(mesh vertices,) bool: those simulated now (not waiting to sew)."""
+        out = np.ones(self.mesh.vertex_count, bool)
+        out[self.waiting] = False
         return out
 
     def stage_plan(self) -> list:
@@ -157,7 +185,8 @@ class Garment:
 
     def sew_stage(self, state, stage: Stage):
         """Begin a sewing ``stage`` of :meth:`stage_plan`: only its pairs pull and merge, the garments
-        outside wait where they were placed (pinned). Returns the state of the rebuilt model."""
+        outside wait where they were placed, out of the model (their forces, solve and contacts cost
+        nothing until they sew). Returns the state of the rebuilt model."""
         self.sewing.sew_only(stage.sewing)
         self.waiting = stage.waiting
         return self.rebuild(state)
@@ -171,6 +200,8 @@ class Garment:
     def moved(self, state, ids, x):
         """``state`` with the unwelded mesh vertices ``ids`` (none merged yet) put at ``x`` at rest."""
         w = self.weld[ids]
+        if len(w) and w.max() >= len(state.x):
+            raise ValueError("moved: the vertices must be simulated (not an outfit's garment waiting to sew)")
         state.x[w], state.v[w] = x, 0.0
         return state
 
@@ -197,6 +228,7 @@ class Garment:
         Returns (state of the rebuilt model, :class:`~tailor.contact.Attachments` or None)."""
         ids = self.attached
         self.gravity = True
+        self.waiting = np.zeros(0, np.intp)  # every garment sewn
         self.gathered = np.zeros(0, np.intp)  # a tucked garment's gathered cloth is free again, under the band
         if len(ids):
             dist, tri, bary, _ = collider.nearest(state.x[self.weld[ids]], pose, 0, cache=False)

@@ -66,18 +66,18 @@ class Dressing:
         """The contacts' constraints for the garment's current numbering: limb walls, attachments
         (while sewing, their heights)."""
         g = self.garment
-        walls = LimbWallContact(self.walls, g.mesh, g.weld, g.thickness) if self.walls is not None and self.walls.count else None
+        walls = None
+        if self.walls is not None and self.walls.count:
+            walls = LimbWallContact(self.walls, g.mesh, g.weld, g.thickness, simulated=g.model.vertex_count)
         held = None
-        if self.held_heights is not None:
+        if self.held_heights is not None:  # an outfit's garments waiting to sew are not held yet
             ids, heights, under, ceilings = self.held_heights
-            held = HeightHold(ids, heights, g.weld, under, ceilings)
+            live, live_under = g.live[ids], g.live[under]
+            held = HeightHold(ids[live], heights[live], g.weld, under[live_under], ceilings[live_under])
         gather = None
         if self.gathering is not None:
             gather = Gather(*self.gathering, TUCK_GATHER_TIME, g.weld)
         self.contacts.constrain(walls, self.attachments, held, gather)
-        waiting = np.zeros(g.model.vertex_count, bool)
-        waiting[g.weld[g.waiting]] = True
-        self.contacts.wait(waiting)
 
     @property
     def frame_dt(self) -> float:

@@ -157,6 +157,30 @@ class Model:
         mask[np.asarray(pinned)] = True
         return replace(self, vertex_pinned=_frozen(mask))
 
+    def prefix(self, count: int) -> "Model":
+        """The model of its first ``count`` vertices: every triangle, hinge, spring and pair among
+        them, nothing joining them to the rest (an outfit's garments inside the one sewing, its
+        outer garments left out until their stage; they must share no element with the first)."""
+        count = int(count)
+        if count >= self.vertex_count:
+            return self
+        faces = np.all(self.faces < count, axis=1)
+        hinges = np.all(self.hinge_vertices < count, axis=1)
+        springs = np.all(self.spring_vertices < count, axis=1)
+        pairs = np.all(self.pair_vertices < count, axis=1)
+        if not (np.all(self.faces >= count, axis=1) | faces).all():
+            raise ValueError(f"a triangle joins the first {count} vertices to the rest: they cannot be simulated apart")
+        fields = {name: getattr(self, name)[faces] for name in (
+            "faces", "face_panel", "face_rest_area", "face_dm_inv", "face_stretch_warp", "face_stretch_weft",
+            "face_stretch_shear", "face_damping_warp", "face_damping_weft", "face_damping_shear")}
+        fields.update({name: getattr(self, name)[hinges] for name in (
+            "hinge_vertices", "hinge_rest_angle", "hinge_stiffness", "hinge_panel", "hinge_curvature_scale")})
+        fields.update({name: getattr(self, name)[springs] for name in (
+            "spring_vertices", "spring_rest_length", "spring_stiffness", "spring_damping")})
+        fields.update({name: getattr(self, name)[pairs] for name in ("pair_vertices", "pair_stiffness", "pair_damping")})
+        fields.update({name: getattr(self, name)[:count] for name in ("rest_uv", "vertex_mass", "vertex_pinned")})
+        return replace(self, **{name: _frozen(a) for name, a in fields.items()})
+
     def state(self, x, v=None, t: float = 0.0) -> "State":
         """A State of this model at positions ``x`` [m] (velocities default to rest)."""
         x = np.array(x, dtype=float)
