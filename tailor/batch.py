@@ -43,13 +43,14 @@ log = logging.getLogger(__name__)
 
 OPTIONS = {
     "frames": int, "fps": float, "resolution": float, "quality": str, "integrator": str, "self_collision": str,
-    "sew_timeout": float, "with_body": bool, "timeout": float,
+    "sew_timeout": float, "with_body": bool, "timeout": float, "tuck": bool,
 }
 """Per-job options and their types; ``resolution`` is in cm (as on the command line), ``timeout``
 in seconds of wall time for the whole job."""
 
 DEFAULTS = {"frames": 25, "fps": 25.0, "resolution": 2.0, "quality": DEFAULT_QUALITY, "integrator": "implicit",
-            "self_collision": "auto", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0}
+            "self_collision": "auto", "sew_timeout": 4.0, "with_body": False, "timeout": 0.0,
+            "tuck": False}
 
 MANIFEST_FIELDS = ("id", "status", "pattern", "body", "fabric", "wall_s", "cpu_s", "vertices", "welded_vertices", "frames",
                    "max_penetration_mm", "crossings", "seam_gap_mm", "reason", "options")
@@ -138,6 +139,8 @@ def _job(entry: dict, base: Path, source: str, where: str, defaults: dict) -> Jo
         body = str(base / body)
     options = {k: _coerce(k, v, f"{source}: {where}.{k}") for k, v in entry.items() if k in OPTIONS}
     options = {k: v for k, v in options.items() if v != DEFAULTS[k]}
+    if options.get("tuck") and len(files) < 2:
+        raise TailorError(f"{source}: {where}.tuck: applies to a list of patterns (a top and a bottom)")
     return Job(files[0] if len(files) == 1 else tuple(files), body, str(entry.get("fabric") or ""), options)
 
 
@@ -247,7 +250,7 @@ def run_job(job: Job, out) -> dict:
             raise JobTimeout(f"time-out after {timeout:g} s ({event.phase}, simulated {event.simulated_s:.2f} s)")
 
     try:
-        pattern = outfit([read_pattern(p) for p in job.patterns])
+        pattern = outfit([read_pattern(p) for p in job.patterns], tuck=job.option("tuck"))
         result = drape(pattern, _body(job.body), job.fabric or None, frames=job.option("frames"), fps=job.option("fps"),
                        resolution=job.option("resolution") * 1e-2, integrator=job.option("integrator"),
                        quality=job.option("quality"), self_collision=job.option("self_collision"),

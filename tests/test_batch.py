@@ -163,6 +163,26 @@ def test_killing_the_batch_command_and_rerunning_loses_only_running_jobs(tmp_pat
     assert all((out / i / "report.json").stat().st_mtime_ns == t for i, t in stamps.items())
 
 
+def test_a_job_may_tuck_an_outfits_top_into_its_bottom(tmp_path, monkeypatch):
+    import tailor.dress
+
+    pair = [str(PANELS / "trousers.json"), str(PANELS / "tshirt.json")]
+    tucked, plain = make_jobs({"jobs": [{"pattern": pair, "tuck": True}, {"pattern": pair}]}, base=tmp_path)
+    assert tucked.option("tuck") and not plain.option("tuck") and tucked.id != plain.id
+    with pytest.raises(TailorError, match=r"jobs\[0\]\.tuck: applies to a list of patterns"):
+        make_jobs({"jobs": [{"pattern": pair[1], "tuck": True}]}, base=tmp_path)
+    seen = []
+
+    def drape(pattern, *args, **kwargs):  # the outfit the job would drape, then stop
+        seen.append([piece.tucks for piece in pattern.pieces])
+        raise TailorError("stopped")
+
+    monkeypatch.setattr(tailor.dress, "drape", drape)
+    for job in (tucked, plain):
+        assert run_job(job, tmp_path / "out")["reason"] == "stopped"
+    assert seen == [[False, True], [False, False]]  # the trousers tuck the T-shirt in
+
+
 def test_defaults_are_what_tailor_drape_uses():
     from tailor.cli import build_parser
 

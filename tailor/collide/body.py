@@ -185,6 +185,12 @@ class BodyCollider:
         found = self._closest(x, *self.candidates(x, frame, cache=cache), body_x)
         return self._confirm_deep(x, found, body_x) if cache else found  # uncached: complete within the margin
 
+    def nearest_within(self, x, body_x, frame: int, radius: float):
+        """As :meth:`nearest` uncached, but within ``radius`` [m] of each point instead of the margin
+        (triangle −1 and distance +inf beyond it): one body broad phase asked at several radii."""
+        keys = self._query(np.asarray(x, float), frame, np.arange(len(x)), radius=radius)
+        return self._closest(x, *self._csr(keys, len(x)), body_x)
+
     def _confirm_deep(self, x, found, body_x):
         """``found`` with the vertices read deeper than half the margin checked against the closed surface.
 
@@ -372,7 +378,7 @@ def _at(thickness, ids):
     return thickness if np.ndim(thickness) == 0 else np.asarray(thickness)[ids]
 
 
-GAP_REACH = (0.01, 0.02, 0.04, 0.15)
+GAP_REACH = (0.015, 0.04, 0.15)
 """Radii [m] within which the body's nearest point is searched exactly, in turn; beyond the last
 a vertex's gap is its distance to the nearest body vertex."""
 
@@ -385,11 +391,11 @@ def body_gap(x, body_x, body_faces):
     x = np.asarray(x, float)
     dist, normal = np.full(len(x), np.inf), np.zeros((len(x), 3))
     todo = np.arange(len(x))
-    for reach in GAP_REACH:
+    collider = BodyCollider(np.asarray(body_x, float)[None], body_faces, margin=GAP_REACH[-1])
+    for reach in GAP_REACH:  # the nearest within a small radius is the nearest: most points stop early
         if not len(todo):
             break
-        collider = BodyCollider(np.asarray(body_x, float)[None], body_faces, margin=reach)
-        d, tri, _, nrm = collider.nearest(x[todo], body_x, 0, cache=False)
+        d, tri, _, nrm = collider.nearest_within(x[todo], body_x, 0, reach)
         found = tri >= 0
         dist[todo[found]], normal[todo[found]] = d[found], nrm[found]
         todo = todo[~found]
