@@ -58,8 +58,9 @@ class ContactSettings:
         neighbours free, :meth:`ContactPipeline._open_seams`: seam edges must be free to meet).
     layers : bool
         Whether contact between an outfit's garments keeps their order whatever side they are on
-        (:class:`~tailor.collide.Layers`); off while sewing, where open seams pass through the
-        garments waiting outside and their neighbours follow.
+        (:class:`~tailor.collide.Layers`); off while sewing, where a pair keeps the side it was
+        on (the rule was written when open seams passed through the garments waiting outside;
+        they are out of the model now).
     """
 
     friction_scale: float = 1.0
