@@ -59,8 +59,7 @@ class ContactSettings:
     layers : bool
         Whether contact between an outfit's garments keeps their order whatever side they are on
         (:class:`~tailor.collide.Layers`); off while sewing, where a pair keeps the side it was
-        on (the rule was written when open seams passed through the garments waiting outside;
-        they are out of the model now).
+        on (docs/outfits.md: with the rule the dress under a T-shirt stops sooner).
     """
 
     friction_scale: float = 1.0
@@ -329,8 +328,8 @@ class ContactPipeline:
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x, bx)
             collider.ignore(*self._open_seams(model))
-            # pinned vertices (attached, an outfit's sewn garments while the next sews) do not move:
-            # read each step, since pins change without the vertex count changing
+            # pinned vertices (attached, a tuck's gathered cloth) do not move: read each step, since
+            # pins change without the vertex count changing
             collider.respond(np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass)), state, dt)
 
     def _open_seams(self, model):

@@ -139,13 +139,11 @@ class Garment:
     def _simulated(self, weld) -> int:
         """How many of the welded vertices are simulated: all but the waiting garments', which
         :func:`~tailor.outfit.outfit` numbers last (its pieces in layer order, innermost first)."""
-        n = int(weld.max()) + 1
-        if not len(self.waiting):
-            return n
-        count = int(weld[self.waiting].min())
-        live = np.ones(self.mesh.vertex_count, bool)
-        live[self.waiting] = False
-        if live.any() and int(weld[live].max()) >= count:
+        live = self.live
+        if live.all():
+            return int(weld.max()) + 1
+        count = int(weld[~live].min())
+        if int(weld[live].max(initial=-1)) >= count:
             raise ValueError("an outfit's waiting garments must be numbered after the ones sewing")
         return count
 
