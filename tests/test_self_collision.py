@@ -398,7 +398,7 @@ def test_an_outfits_layers_searched_apart_find_the_same_candidates_as_searched_t
     found = []
     for garment in (upper.astype(np.int64), None):
         collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="auto", garment=garment,
-                                partial=partial, patch=0.03)  # small patches: many corners
+                                partial=partial)
         state = model.state(x0.copy(), np.zeros_like(x0))
         steps = []
         for k in range(6):

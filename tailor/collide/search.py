@@ -68,9 +68,8 @@ class PairSearch:
         find = partial(vertex_triangle_pairs, faces=self.faces, lo=lo, hi=hi, x=x, radius=self.radius, cell=self.cell,
                        ring=self.ring, exact=exact)
         parts = []
-        edges = unique_ints(self.face_edges[faces].ravel())
         for a, b in self._searches(faces, pairs):
-            ee = self._edge_pairs(edges, a, b, lo, hi, dirty)
+            ee = self._edge_pairs(a, b, lo, hi, dirty)
             if b is None:
                 parts.append(self._vertex_triangle(find, a, a, dirty) + ee)
             else:  # each side's vertices against the other's triangles
@@ -105,27 +104,18 @@ class PairSearch:
         parts = (find(verts[moved], tris), find(verts[~moved], tris[touching(self.faces[tris], dirty)]))
         return tuple(np.concatenate(p) for p in zip(*parts))
 
-    def _edge_pairs(self, edges, faces, others, lo, hi, dirty) -> tuple:
-        """(ee, near) of the active ``edges`` among the vertices of ``faces`` (an edge lies in each
-        patch both its ends do, whichever faces hold it: as :meth:`Regions.allowed_edge_edge` judges
-        it) among themselves, or against those among the vertices of ``others``: all, or
-        (``dirty``) the pairs with a dirty end."""
+    def _edge_pairs(self, faces, others, lo, hi, dirty) -> tuple:
+        """(ee, near) of the edges of ``faces`` among themselves, or against those of ``others``: all,
+        or (``dirty``) the pairs with a dirty end."""
         if not self.edges:
             return _none(2)
         pairs = partial(edge_edge_pairs, edges=self.edge_ends, lo=lo, hi=hi, radius=self.radius, cell=self.cell, ring=self.ring)
-        a = self._among(edges, faces)
+        a = unique_ints(self.face_edges[faces].ravel())
         if others is None:
             return pairs(a, dirty=None if dirty is None else touching(self.edge_ends[a], dirty))
-        b = self._among(edges, others)
+        b = unique_ints(self.face_edges[others].ravel())
         if dirty is None:
             return pairs(a, others=b)
         da, db = touching(self.edge_ends[a], dirty), touching(self.edge_ends[b], dirty)
         parts = (pairs(a[da], others=b), pairs(a[~da], others=b[db]))
         return tuple(np.concatenate(p) for p in zip(*parts))
-
-    def _among(self, edges, faces):
-        """The ``edges`` whose two ends are vertices of ``faces``."""
-        inside = np.zeros(len(self.ring[0]) - 1, bool)
-        inside[self.faces[faces]] = True
-        ends = self.edge_ends[edges]
-        return edges[inside[ends[:, 0]] & inside[ends[:, 1]]]
