@@ -13,8 +13,7 @@ threshold distance from the cloth's vertices") runs in three stages:
    one another, found between boxes swept from each vertex's place at the last step to its place
    now (relative to the cloth's centroid), over a compiled uniform grid rebuilt each query
    (:mod:`tailor.collide.grid`: python-fcl can neither refit nor hand back pairs without a Python
-   object each); an outfit's searched garment by garment and between garments
-   (:class:`~tailor.collide.search.PairSearch`). Each vertex is anchored where it was last queried; a pair stays valid while
+   object each). Each vertex is anchored where it was last queried; a pair stays valid while
    neither end moves ``margin / 2`` from its anchor (two points then approach by less than
    ``margin``). A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices
    that have (the others' anchors are their boxes), unless most have. Swept boxes are tight
