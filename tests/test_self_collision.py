@@ -385,38 +385,6 @@ def test_flat_layers_lying_on_each_other_are_candidates_of_each_other_not_of_the
     assert found["auto"][2][upper, 2].min() > -0.45  # slowed: at 0.5 m/s it would have come within 0 of the lower
 
 
-@pytest.mark.parametrize("partial", [0.0, 0.5])
-def test_an_outfits_layers_searched_apart_find_the_same_candidates_as_searched_together(partial):
-    """Two garments, crumpled (so each has patches folded onto themselves) and lying one on the
-    other: searched by layer (each garment's own touching patches, then the two against each other)
-    the candidates are those of one search over every active face, step after step."""
-    model, x0 = stacked(0.004, 0.0, offset=0.0, size=0.2, resolution=0.02)
-    rng = np.random.default_rng(3)
-    x0 = x0 + rng.normal(0.0, 0.004, x0.shape)
-    upper = panel_vertices(model, 1)
-    inv_mass = np.zeros(model.vertex_count)  # responses move nothing: both see the same motion
-    found = []
-    for garment in (upper.astype(np.int64), None):
-        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="auto", garment=garment,
-                                partial=partial)
-        state = model.state(x0.copy(), np.zeros_like(x0))
-        steps = []
-        for k in range(6):
-            v = np.zeros_like(x0)
-            v[upper] = np.sin(0.3 * k + x0[upper, :1]) * np.array([0.0, 0.0, 0.4])
-            state = model.state(state.x + 0.01 * v, v)
-            collider.respond(inv_mass, state, 0.01)
-            keys = np.sort(np.sort(collider._ee.reshape(-1, 2, 2), axis=2) @ [model.vertex_count, 1], axis=1)  # each pair one way
-            steps.append((set(zip(collider._vtx.tolist(), collider._tri.tolist())), set(map(tuple, keys.tolist()))))
-        found.append(steps)
-    layered, together = found
-    vt = np.array(sorted(layered[-1][0]))
-    within = upper[vt[:, 0]] == upper[model.faces[vt[:, 1], 0]]
-    assert within.sum() > 50 and (~within).sum() > 50  # folds within a garment and contact between them
-    for (vt_a, ee_a), (vt_b, ee_b) in zip(layered, together):
-        assert vt_a == vt_b and ee_a == ee_b
-
-
 @pytest.mark.parametrize("mode", ["on", "auto"])
 def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair(mode):
     """A corner flapping over a still panel: the still panel keeps its candidates (partial queries
@@ -443,7 +411,7 @@ def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near
         rx = state.x - state.x.mean(axis=0)
         faces = np.arange(len(model.faces))
         near_v, near_t, _ = vertex_triangle_pairs(unique_ints(model.faces.ravel()), faces, collider.faces, rx, rx, rx, 0.003,
-                                                  collider._search.cell, collider._search.ring, exact=True)
+                                                  collider._grid_cell, collider._ring_csr, exact=True)
         held = set(zip(collider._vtx.tolist(), collider._tri.tolist()))
         assert set(zip(near_v.tolist(), near_t.tolist())) <= held, step
         near_pairs += len(near_v)

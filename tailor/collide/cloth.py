@@ -51,19 +51,22 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 
 import numpy as np
 
 from ..errors import SimulationUnstable
 from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
                             touching, touching_vt, unique_ints)
+from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .layers import Layers
 from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
-from .search import PairSearch
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
+GRID_EDGES = 2.0
+"""Side of the broad phase's grid cells, in mean edge lengths of the cloth."""
 MAX_SUBSTEPS = 32
 """At most this many contact sub-steps per step (each covers one thickness of relative motion): a
 panel springing back as settling begins moves 4–5 cm in a step, two garments deep at an armpit."""
@@ -146,13 +149,18 @@ class SelfCollider:
         if garment is None and layers is not None:
             garment = layers.vertex_layer(self.faces, self.n)
         self._garment = None if garment is None else np.asarray(garment, np.int64)  # each vertex's garment (its layer)
-        self._search = PairSearch(self.faces, x, self.thickness + self.margin, edges=self.edges)
-        length = self._search.mean_edge
+        e = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        self._ring_csr = vertex_rings(self.faces, self.n)  # each vertex's neighbours across an edge
+        # undirected edges and each face's edges, for edge–edge pairs
+        e = np.sort(e, axis=1)
+        keys, face_edge = np.unique(e[:, 0] * max(self.n, 1) + e[:, 1], return_inverse=True)  # one integer per edge
+        self._edges = np.column_stack([keys // max(self.n, 1), keys % max(self.n, 1)])
+        self._face_edges = face_edge.reshape(-1, 3).astype(np.int64)
+        length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
+        self._grid_cell = GRID_EDGES * float(np.mean(length)) if len(length) else 1.0
         if patch is None:
-            patch = max(PATCH_MIN, PATCH_EDGES * length) if length else 0.1
+            patch = max(PATCH_MIN, PATCH_EDGES * float(np.mean(length))) if len(length) else 0.1
         self.regions = Regions(self.faces, np.asarray(face_group), np.asarray(x, float), patch)
-        if self._garment is not None:
-            self._search.by_layer(self.regions.face_patch, self._garment)
         self._ee = np.zeros((0, 4), np.int64)
         self._anchor = None  # (N, 3) each vertex's position relative to the centroid when last queried
         self._active = None  # (F,) bool: the faces the candidates were found among
@@ -238,10 +246,23 @@ class SelfCollider:
     def _find(self, x, lo, hi, faces, dirty, *, exact):
         """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the
         pairs touching a dirty vertex added to the kept ones that touch none."""
+        verts = unique_ints(self.faces[faces].ravel())
+        radius = self.thickness + self.margin
         # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
         # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
         # (ignoring those, a strip crumpling over one or two triangles passed through itself)
-        vertex, tri, near, ee, ee_near = self._search(x, lo, hi, faces, self._pairs, dirty, exact=exact)
+        find = partial(vertex_triangle_pairs, faces=self.faces, lo=lo, hi=hi, x=x, radius=radius, cell=self._grid_cell,
+                       ring=self._ring_csr, exact=exact)
+        edge_ids = unique_ints(self._face_edges[faces].ravel())
+        if dirty is None:
+            vertex, tri, near = find(verts, faces)
+            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, None)
+        else:
+            dirty_face = touching(self.faces[faces], dirty)
+            moved = dirty[verts]
+            parts = (find(verts[moved], faces), find(verts[~moved], faces[dirty_face]))
+            vertex, tri, near = (np.concatenate(p) for p in zip(*parts))
+            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty))
         keep_vt, keep_ee = self._in_touching_patches(vertex, tri, ee)
         vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
         vertex, tri, near, ee, ee_near = self._drop_ignored(vertex, tri, near, ee, ee_near)
@@ -255,8 +276,14 @@ class SelfCollider:
         self._vtx, self._tri = np.ascontiguousarray(vertex, dtype=np.int64), np.ascontiguousarray(tri, dtype=np.int64)
         self._tri_near, self._tri_side = near, tri_side
         self._ee, self._ee_near, self._ee_toward = ee, ee_near, self._edge_directions(x, ee)
-        self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(unique_ints(self.faces[faces].ravel())))
+        self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
+
+    def _edge_pairs(self, ids, lo, hi, dirty):
+        if not self.edges:
+            return np.zeros((0, 4), np.int64), np.zeros(0, bool)
+        return edge_edge_pairs(ids, self._edges, lo, hi, self.thickness + self.margin, self._grid_cell, self._ring_csr,
+                               dirty=dirty)
 
     def _tri_sides(self, vertex, tri):
         """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""

@@ -235,28 +235,27 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
 
 
 @njit(cache=True)
-def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, q_edge, q_lo, q_hi, i_edge, i_lo, i_hi, dirty, same, ptr, items,
-            origin, cell, dims, r):
-    """Count (``fill`` False) or write the item edges within ``r`` of query edge ``q``, sharing no end.
-    ``same``: the queries are the items (every clean one, and the dirty ones after ``q``: each pair once)."""
-    a0, a1 = q_edge[q, 0], q_edge[q, 1]
+def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin, cell, dims, r):
+    """Count (``fill`` False) or write the edges within ``r`` of edge ``q``, sharing no end: every
+    clean one, and the dirty ones after it (each dirty pair once)."""
+    a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     r2 = r * r
-    i0, j0, k0, i1, j1, k1 = cell_span(q_lo[q], q_hi[q], r, origin, cell, dims)
+    i0, j0, k0, i1, j1, k1 = cell_span(e_lo[q], e_hi[q], r, origin, cell, dims)
     for c in range(k0, k1 + 1):
         for b in range(j0, j1 + 1):
             for a in range(i0, i1 + 1):
                 key = a + dims[0] * (b + dims[1] * c)
                 for m in range(ptr[key], ptr[key + 1]):
                     s = items[m]
-                    if same and (s == q or (dirty[s] and s < q)):
+                    if s == q or (dirty[s] and s < q):
                         continue
-                    b0, b1 = i_edge[s, 0], i_edge[s, 1]
+                    b0, b1 = edges[ids[s], 0], edges[ids[s], 1]
                     if a0 == b0 or a0 == b1 or a1 == b0 or a1 == b1:
                         continue
-                    if gap2(q_lo[q], q_hi[q], i_lo[s], i_hi[s]) > r2:
+                    if gap2(e_lo[q], e_hi[q], e_lo[s], e_hi[s]) > r2:
                         continue
-                    if not owns(q_lo[q], i_lo[s], r, a, b, c, origin, cell, dims):
+                    if not owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
                         continue
                     if fill:
                         out[start + found, 0] = a0
@@ -272,48 +271,37 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, q_edge, q_lo, q_h
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs(q_edge, q_lo, q_hi, i_edge, i_lo, i_hi, queries, dirty, same, origin, cell, dims, r, ring_ptr, ring_idx):
-    ptr, items = bin_boxes(i_lo, i_hi, origin, cell, dims)
+def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
+    ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     counts = np.zeros(len(queries), np.int64)
     dummy = np.zeros((0, 4), np.int64)
     no = np.zeros(0, np.bool_)
     for k in prange(len(queries)):
-        counts[k] = _ee_one(queries[k], False, dummy, no, 0, ring_ptr, ring_idx, q_edge, q_lo, q_hi, i_edge, i_lo, i_hi, dirty, same,
-                            ptr, items, origin, cell, dims, r)
+        counts[k] = _ee_one(queries[k], False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
+                            cell, dims, r)
     starts = np.zeros(len(queries) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out = np.empty((starts[-1], 4), np.int64)
     out_near = np.empty(starts[-1], np.bool_)
     for k in prange(len(queries)):
-        _ee_one(queries[k], True, out, out_near, starts[k], ring_ptr, ring_idx, q_edge, q_lo, q_hi, i_edge, i_lo, i_hi, dirty, same,
-                ptr, items, origin, cell, dims, r)
+        _ee_one(queries[k], True, out, out_near, starts[k], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
+                cell, dims, r)
     return out, out_near
 
 
-def _edge_boxes(ids, edges, lo, hi):
-    """(ends (E, 2), lo, hi) of the edges ``ids``: boxes round their ends' boxes."""
-    ends = np.ascontiguousarray(edges[ids], np.int64)
-    return (ends, np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]])),
-            np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]])))
-
-
-def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None, others=None):
+def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
     share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
     pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
     :func:`vertex_triangle_pairs`). With ``dirty`` ((len(ids),) bool), only the pairs with at least
-    one dirty edge (the others are known from an earlier query). With ``others`` (edge ids), the
-    pairs between an edge of ``ids`` and one of ``others`` instead (two layers: no item is visited
-    by a query of its own layer); ``dirty`` then picks the queries."""
+    one dirty edge (the others are known from an earlier query)."""
     ids = np.ascontiguousarray(ids, np.int64)
-    none = np.zeros((0, 4), np.int64), np.zeros(0, bool)
-    same = others is None
-    items = ids if same else np.ascontiguousarray(others, np.int64)
-    if len(ids) < (2 if same else 1) or not len(items):
-        return none
-    q_edge, q_lo, q_hi = _edge_boxes(ids, edges, lo, hi)
-    i_edge, i_lo, i_hi = (q_edge, q_lo, q_hi) if same else _edge_boxes(items, edges, lo, hi)
+    if len(ids) < 2:
+        return np.zeros((0, 4), np.int64), np.zeros(0, bool)
     dirty = np.ones(len(ids), np.bool_) if dirty is None else np.ascontiguousarray(dirty, np.bool_)
-    grid = Grid(np.vstack([q_lo, i_lo]) - radius, np.vstack([q_hi, i_hi]) + radius, cell)
-    return _ee_pairs(q_edge, q_lo, q_hi, i_edge, i_lo, i_hi, np.flatnonzero(dirty).astype(np.int64), dirty, same,
+    ends = edges[ids]
+    e_lo = np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]]))
+    e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
+    grid = Grid(e_lo - radius, e_hi + radius, cell)
+    return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
                      grid.origin, grid.cell, grid.dims, float(radius), *ring)
