@@ -72,8 +72,9 @@ class Dressing:
         held = None
         if self.held_heights is not None:  # an outfit's garments waiting to sew are not held yet
             ids, heights, under, ceilings = self.held_heights
-            live, live_under = g.live[ids], g.live[under]
-            held = HeightHold(ids[live], heights[live], g.weld, under[live_under], ceilings[live_under])
+            live = g.live
+            now, now_under = live[ids], live[under]
+            held = HeightHold(ids[now], heights[now], g.weld, under[now_under], ceilings[now_under])
         gather = None
         if self.gathering is not None:
             gather = Gather(*self.gathering, TUCK_GATHER_TIME, g.weld)
