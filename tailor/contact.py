@@ -267,6 +267,8 @@ class ContactPipeline:
         self._rings = None  # (numbering, each vertex's neighbours) for untangling
         self._start = None  # (N, 3) where the next step starts after a renumbering (follow), for the self-collider
         self._layer_thickness = None  # (numbering, (N,) body thickness per vertex) of an outfit
+        self._untucked = None  # (N,) int: a tucked top's cloth outside its tuck, the garment it keeps its side against
+        self._untucked_version = 0
 
     def configure(self, settings: ContactSettings) -> None:
         """What contact does from now on (a new phase)."""
@@ -275,6 +277,17 @@ class ContactPipeline:
     def constrain(self, *constraints) -> None:
         """Constraints applied before the body each step (``apply(state, body_x, body_v)``): limb walls, attachments."""
         self.constraints = tuple(c for c in constraints if c is not None)
+
+    def untucked(self, against) -> None:
+        """``against`` (N,) int per vertex of the current numbering: the garment against which the
+        vertex keeps the side it is on instead of the layer rule's, −1 for none (a tucked top's
+        cloth above the band it is tucked into, :meth:`tailor.dress.garment.Garment.untucked`);
+        None: the layer rule holds between every two garments."""
+        new = None if against is None or not (np.asarray(against) >= 0).any() else np.asarray(against, np.int64)
+        old = self._untucked
+        if (new is None) != (old is None) or (new is not None and not np.array_equal(new, old)):
+            self._untucked = new
+            self._untucked_version += 1  # a layered collider is built afresh with it
 
     def follow(self, friction, x=None) -> None:
         """The cloth's vertices were welded or moved between steps (their count changed; the colliders
@@ -371,7 +384,7 @@ class ContactPipeline:
         """The self-collider of ``model``'s numbering, built from positions ``x`` (and, for an
         outfit's layers, the body at ``body_x``) when it changed."""
         layered = self.panel_layer is not None and body_x is not None and self.settings.layers
-        key = (model.vertex_count, self._version, layered)
+        key = (model.vertex_count, self._version, layered, self._untucked_version if layered else 0)
         start = self._start  # where the next step starts, when told (follow)
         if self._self is None or self._self_key != key:
             if start is None and self._self is not None and self._self_key[:2] == key[:2]:
@@ -380,8 +393,9 @@ class ContactPipeline:
             friction = float(np.mean(self.friction * self.settings.friction_scale))
             layers = None
             if layered:
+                loose = self._untucked if self._untucked is not None and len(self._untucked) == model.vertex_count else None
                 layers = Layers.round_body(self.panel_layer[model.face_panel], model.face_panel, x, model.faces, body_x,
-                                           self.body.faces)
+                                           self.body.faces, loose=loose)
             self._self = SelfCollider(model.faces, model.face_panel, x, thickness=self.thickness, margin=self.self_margin,
                                       mode=self.self_mode, friction=friction, layers=layers,
                                       partial=PARTIAL_SHARE if self.panel_layer is not None else 0.0,

@@ -307,25 +307,30 @@ def test_tuck_needs_a_top_and_a_bottom(tmp_path, capsys):
     assert not (tmp_path / "run").exists()
 
 
-def test_a_tucked_t_shirt_walks_inside_the_trousers_band(tmp_path):
+@pytest.mark.parametrize("resolution,frames", [("4", 2), pytest.param("2", 10, marks=pytest.mark.slow)])
+def test_a_tucked_t_shirt_walks_inside_the_trousers_band(tmp_path, resolution, frames):
     """``--tuck``: the T-shirt's hem is gathered onto the body before the trousers' band closes over
     it; walking, no crossing, and where the two overlap (the hem under the band) no trouser vertex
-    is nearer the body than the T-shirt's: the T-shirt is the inner layer there."""
+    is nearer the body than the T-shirt's: the T-shirt is the inner layer there. At the default
+    2 cm the walk reaches the frames where the T-shirt above the band blouses over it (it crossed
+    the band in frames 6 and 7 while the layer rule held it inside there too)."""
     out = tmp_path / "run"
     argv = ["-q", "drape", str(PANELS / "trousers.json"), str(PANELS / "tshirt.json"), "--tuck", "--body",
-            "mannequin-walk", "--frames", "2", "--resolution", "4", "--with-body", "--out", str(out)]
+            "mannequin-walk", "--frames", str(frames), "--resolution", resolution, "--with-body", "--out", str(out)]
     assert main(argv) == 0
     report = json.loads((out / "report.json").read_text())
     assert list(report["garments"]) == ["tshirt", "trousers"]
     assert max(report["crossings_per_frame"]) == 0 and report["max_penetration_m"] <= 0.001
-    assert max(report["out_of_layer_per_frame"]) <= 2
-    mesh = read_obj(out / "garment_0001.obj")
-    x = read_obj_vertices(out / "garment_0001.obj")
+    # a few of the band's top vertices under the blouse count (the T-shirt over them is the inner garment)
+    assert max(report["out_of_layer_per_frame"]) <= 5
+    last = f"{frames - 1:04d}"
+    mesh = read_obj(out / f"garment_{last}.obj")
+    x = read_obj_vertices(out / f"garment_{last}.obj")
     trousers = np.asarray([g.startswith("trousers/") for g in mesh.group_names])[mesh.face_group]
     garment = np.zeros(len(x), np.intp)
     garment[np.unique(mesh.faces[trousers])] = 1
-    body = read_obj(out / "body_0001.obj")
-    assert out_of_order(x, garment, body.vertices, body.faces)[0, 1] <= 2
+    body = read_obj(out / f"body_{last}.obj")
+    assert out_of_order(x, garment, body.vertices, body.faces)[0, 1] <= 5
     # the hem really is under the band: T-shirt vertices below the trousers' top, near trouser cloth
     band_top = x[garment == 1, 2].max()
     tucked = np.flatnonzero((garment == 0) & (x[:, 2] < band_top - 0.02))

@@ -268,6 +268,30 @@ def test_an_outfits_layers_put_an_outer_panel_caught_behind_an_inner_one_back_ou
     assert ends[0] < 0.0 < 0.002 < ends[1]
 
 
+def test_cloth_loose_against_a_garment_keeps_its_side_there():
+    """Layers.loose: a vertex loose against the other garment (a tucked top's cloth above the band)
+    keeps the side it was on, as within one garment, and so does every face it is a corner of; the
+    rest of the two garments keeps the layer rule."""
+    from tailor.collide import Layers
+
+    model, x0 = stacked(-0.001, 0.0, offset=0.0, size=0.1, resolution=0.02)  # "upper" just under "lower"
+    outer = panel_vertices(model, 1)
+    tri = x0[model.faces]
+    up = np.where(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])[:, 2] > 0, 1, -1).astype(np.int8)
+    mid = np.median(x0[outer, 0])
+    loose = np.where(outer & (x0[:, 0] < mid), 0, -1)  # the outer panel's left half, loose against panel 0
+    v0 = np.zeros_like(x0)
+    v0[outer, 2] = -0.2
+    state = model.state(x0.copy(), v0.copy())
+    layers = Layers(model.face_panel.astype(np.int64), up, loose)
+    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on", layers=layers)
+    assert collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01) > 0
+    z_inner = state.x[~outer, 2].mean()
+    span = np.ptp(x0[outer, 0])
+    left, right = outer & (x0[:, 0] < mid - 0.25 * span), outer & (x0[:, 0] > mid + 0.25 * span)
+    assert state.x[left, 2].max() < z_inner < state.x[right, 2].min()  # behind as it was; kept outside
+
+
 def test_edge_pairs_between_garments_point_out_of_the_inner_edge():
     """Layers.edge_directions: zero within a garment; between two, the inner edge's outward normal
     (pointing from it towards where the outer edge belongs), negated when edge a is the inner one."""

@@ -289,7 +289,7 @@ class SelfCollider:
         """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""
         if self.layers is None:
             return np.zeros(len(tri), np.int8)
-        return self.layers.vertex_triangle_sides(self._garment, vertex, tri)
+        return self.layers.vertex_triangle_sides(self._garment, self.faces, vertex, tri)
 
     def _edge_directions(self, x, ee):
         """Each edge–edge candidate's outward direction at ``x`` (:class:`Layers`; none for a single garment)."""

@@ -79,6 +79,7 @@ class Garment:
         self.waiting = np.zeros(0, np.intp)  # mesh vertices of an outfit's garments not sewing yet: out of the model
         self._parked = np.zeros((0, 3))  # positions of the waiting garments' simulated vertices (the last of the numbering)
         self.gathered = np.zeros(0, np.intp)  # mesh vertices tucked under a band while it sews, carried by a Gather
+        self._tuck = None  # (mesh vertices tucked, the garment tucking them) once a band closed over them
         self.gravity = False
         self.rebuilds = 0
         self.cloth: TearableCloth | None = None
@@ -146,6 +147,27 @@ class Garment:
         if int(weld[live].max(initial=-1)) >= count:
             raise ValueError("an outfit's waiting garments must be numbered after the ones sewing")
         return count
+
+    def tuck(self, ids, into: int) -> None:
+        """Mesh vertices ``ids`` of the garments inside ``into`` tucked under its band: held (pinned)
+        while it sews, free again once the outfit is attached (:meth:`attach`), and the inner layer
+        against ``into`` from then on (:meth:`untucked`)."""
+        self.gathered = np.asarray(ids, np.intp)
+        self._tuck = (self.gathered, int(into))
+
+    def untucked(self):
+        """(simulated vertices,) int: for the cloth of a tucked garment outside its tuck (a top's blouse
+        above the band), the garment tucking it, against which it keeps the side it is on; −1 for
+        the rest. None without a tuck. Above the band the top lies over the bottom, under it
+        beneath: neither is the outer layer there (:class:`~tailor.collide.Layers`)."""
+        if self._tuck is None:
+            return None
+        ids, into = self._tuck
+        inner = garment_of_vertex(self.pattern, self.mesh.vertex_panel) < into
+        out = np.full(int(self.weld.max()) + 1, -1, np.int64)
+        out[self.weld[inner]] = into
+        out[self.weld[ids]] = -1
+        return out[:self.model.vertex_count]
 
     @property
     def live(self) -> np.ndarray:

@@ -64,7 +64,8 @@ class Dressing:
 
     def constrain(self) -> None:
         """The contacts' constraints for the garment's current numbering: limb walls, attachments
-        (while sewing, their heights)."""
+        (while sewing, their heights), a tuck's gather; and which cloth a tuck leaves out of the
+        layer rule (:meth:`Garment.untucked`)."""
         g = self.garment
         walls = None
         if self.walls is not None and self.walls.count:
@@ -79,6 +80,7 @@ class Dressing:
         if self.gathering is not None:
             gather = Gather(*self.gathering, TUCK_GATHER_TIME, g.weld)
         self.contacts.constrain(walls, self.attachments, held, gather)
+        self.contacts.untucked(g.untucked() if self.phase.moving else None)
 
     @property
     def frame_dt(self) -> float:
@@ -90,6 +92,7 @@ class Dressing:
         wind = self.options.wind if phase.wind else None
         self.integrator.configure(SolverSettings(phase.tolerance or self.quality.tolerance, phase.max_stretch_change, wind))
         self.contacts.configure(phase.contact)
+        self.constrain()
         self.stepper.configure(forces=self.garment.forces(wind),
                                guard=Guard(max_stretch=phase.max_stretch or self.motion_limit))
 
@@ -251,7 +254,7 @@ def _gather(d: Dressing, state, garment: int):
     inward[:, :2] = 0.5 * (inward[:, :2] + centre)
     found, _, _, out = d.contacts.body.push_out(inward, d.timeline.pose, 0, clearance=g.thickness, reach=TUCK_REACH)
     low, target = low[found], out
-    g.gathered = low
+    g.tuck(low, garment)
     d.gathering = (low, x[low], target, float(state.t))
     state = g.rebuild(state)
     d.contacts.follow(g.friction, state.x)
