@@ -44,7 +44,7 @@ from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSi
 from .placement import LAYER_GAP
 from .sizing import loop_girth, pattern_loops, scaled_panel
 
-__all__ = ["outfit", "ease_layers", "garment_of_vertex", "out_of_order", "ATTACH_RISE"]
+__all__ = ["outfit", "ease_layers", "garment_of_vertex", "out_of_order", "tuck_targets", "ATTACH_RISE"]
 
 ATTACH_RISE = 0.015
 """How much higher [m] an outer garment held to a landmark an inner garment is held to is placed, for
@@ -212,3 +212,58 @@ def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02) -> np.n
     for i, j, outer, nearest in near:
         out[i, j] = int(np.count_nonzero(gap[outer] < gap[nearest]))
     return out
+
+
+def tuck_targets(points, body_x, body_faces, *, clearance: float, row: float):
+    """Where a tuck draws ``points`` (M, 3) of a top's hem: (ids of the points moved, their targets).
+
+    The points go in rows ``row`` [m] high; each row goes straight in, at its own height, onto the
+    convex hull of the body's outlines its loop encloses (the hips, or both legs below the crotch:
+    a band wraps the hull, not into the gap between the legs), ``clearance`` [m] out, along the
+    ray from the hull's centre. Heights are kept and each row's order round its loop too (a ray
+    from inside a convex outline meets its boundary once), so the cloth is compressed along the
+    loop, never folded through itself. Points whose row encloses no outline stay where they are.
+    """
+    from shapely.geometry import MultiPoint, Point
+
+    from .sections import horizontal_outlines
+
+    points = np.asarray(points, float)
+    band = np.floor(points[:, 2] / row).astype(np.int64)
+    rows, which = np.unique(band, return_inverse=True)
+    heights = np.array([points[which == k, 2].mean() for k in range(len(rows))])
+    outlines = horizontal_outlines(body_x, body_faces, heights)
+    ids, targets = [], []
+    for k, polys in enumerate(outlines):
+        mine = np.flatnonzero(which == k)
+        loop = MultiPoint([tuple(p) for p in points[mine, :2]]).convex_hull
+        inside = [p for p in polys or () if loop.contains(Point(p.centroid.coords[0]))]
+        if len(mine) < 3 or not inside:
+            continue
+        hull = MultiPoint([c for p in inside for c in p.exterior.coords]).convex_hull
+        xy = _radially_onto(np.asarray(hull.exterior.coords)[:-1], np.asarray(hull.centroid.coords[0]), points[mine, :2], clearance)
+        ids.append(mine)
+        targets.append(np.column_stack([xy, points[mine, 2]]))
+    if not ids:
+        return np.zeros(0, np.intp), np.zeros((0, 3))
+    return np.concatenate(ids), np.concatenate(targets)
+
+
+def _radially_onto(hull, centre, points, clearance: float):
+    """``points`` (M, 2) moved along the rays from ``centre`` onto the boundary of the convex polygon
+    ``hull`` (K, 2; ``centre`` inside it), ``clearance`` further out."""
+    d = points - centre
+    a, e = hull, np.roll(hull, -1, axis=0) - hull
+    ac = a - centre
+    denom = _cross(d[:, None, :], e[None])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = _cross(ac[None], e[None]) / denom
+        s = _cross(ac[None], d[:, None, :]) / denom
+    t = np.where((np.abs(denom) > 1e-15) & (s >= -1e-9) & (s <= 1 + 1e-9) & (t > 0), t, 0.0).max(axis=1)
+    length = np.maximum(np.linalg.norm(d, axis=1), 1e-12)
+    return centre + d * (t + clearance / length)[:, None]
+
+
+def _cross(u, v):
+    """The z component of 2-D cross products."""
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]

@@ -337,3 +337,30 @@ def test_a_tucked_t_shirt_walks_inside_the_trousers_band(tmp_path, resolution, f
     from scipy.spatial import cKDTree
     d, _ = cKDTree(x[garment == 1]).query(x[tucked])
     assert np.count_nonzero(d < 0.03) > 30
+
+
+def test_a_tuck_draws_a_hem_round_both_legs_in_at_its_own_height():
+    """tuck_targets: a hem loop round two legs goes straight in onto their hull, a clearance out:
+    heights kept, the order round the loop kept (no fold), nothing drawn into the gap between
+    the legs or into a leg; a row round no outline stays."""
+    import trimesh
+
+    from tailor.outfit import tuck_targets
+
+    legs = [trimesh.creation.cylinder(radius=0.07, height=1.0, sections=48) for _ in range(2)]
+    for leg, x in zip(legs, (-0.09, 0.09)):
+        leg.apply_translation((x, 0.0, 0.5))
+    body = trimesh.util.concatenate(legs)
+    angle = np.linspace(0.0, 2.0 * np.pi, 90, endpoint=False)
+    ring = np.column_stack([0.3 * np.cos(angle), 0.22 * np.sin(angle), np.full(90, 0.5)])
+    above = ring + (0.0, 0.0, 0.6)  # at 1.1 m: over the legs' tops, round no outline
+    ids, target = tuck_targets(np.vstack([ring, above]), body.vertices, body.faces, clearance=0.003, row=0.02)
+    assert sorted(ids) == list(range(90))
+    target = target[np.argsort(ids)]
+    np.testing.assert_allclose(target[:, 2], 0.5)
+    r = np.hypot(np.abs(target[:, 0]) - 0.09, target[:, 1])
+    gap = np.abs(target[:, 0]) < 0.09  # over the gap between the legs: on the hull's flat sides
+    np.testing.assert_allclose(np.abs(target[gap, 1]), 0.07 + 0.003, atol=2e-3)
+    assert (r[~gap] > 0.07).all() and np.allclose(r[~gap], 0.073, atol=2e-3)
+    turn = np.unwrap(np.arctan2(target[:, 1], target[:, 0]))
+    assert (np.diff(turn) > 0).all()  # the loop's order kept

@@ -21,7 +21,7 @@ from ..tearing import Cut
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
            "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
-           "TUCK_BELOW", "TUCK_GATHER_TIME", "TUCK_ROW", "TUCK_REACH"]
+           "TUCK_BELOW", "TUCK_GATHER_TIME", "TUCK_ROW"]
 
 DRAPE_RESOLUTION = 0.02
 """Default garment mesh edge length [m] of :func:`~tailor.dress.drape` and ``tailor drape`` (2 cm)."""
@@ -115,8 +115,6 @@ TUCK_GATHER_TIME = 0.2
 """[s] of sewing over which a tuck's cloth is carried onto the body (at once, rows fold over each other)."""
 TUCK_ROW = 0.02
 """[m] Height of the rows whose loop centre a tuck draws the cloth toward."""
-TUCK_REACH = 0.2
-"""[m] How far from the surface a tuck looks for the body under the cloth it draws in."""
 
 
 @dataclass(frozen=True, slots=True)

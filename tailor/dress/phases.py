@@ -24,11 +24,11 @@ import numpy as np
 from ..contact import Gather, HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
-from ..outfit import garment_of_vertex
+from ..outfit import garment_of_vertex, tuck_targets
 from ..sim import Guard, Stepper, max_stretch
 from .options import (BLOCKED_OVER, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
                       ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
-                      TUCK_REACH, TUCK_ROW, WELD_BATCH, DrapeOptions, PhaseSettings)
+                      TUCK_ROW, WELD_BATCH, DrapeOptions, PhaseSettings)
 from .report import DrapeProgress, PhaseReport
 
 __all__ = ["Dressing", "sew", "settle", "transition", "animate", "rms_speed"]
@@ -237,9 +237,9 @@ def _gather(d: Dressing, state, garment: int):
     """A tuck: the inner garments' cloth lower than :data:`~.options.TUCK_BELOW` above the top edge of
     ``garment`` (placed, about to sew) carried onto the body one thickness out over
     :data:`~.options.TUCK_GATHER_TIME` s and held there while ``garment`` sews (let go when settling
-    attaches the outfit). Each point goes halfway to its height's axis (the centre of the inner
-    cloth's loop at that height, within the body) and back out to the surface: a top's hem is
-    drawn in round the hips as a hand tucks it, compressed along its loop, not folded."""
+    attaches the outfit). Each row goes straight in at its height onto the hull of the body within
+    its loop (:func:`~tailor.outfit.tuck_targets`): a top's hem drawn in round the hips as a hand
+    tucks it, compressed along its loop, not folded."""
     g = d.garment
     x = g.frame(state)
     inner = np.flatnonzero(garment_of_vertex(g.pattern, g.mesh.vertex_panel) < garment)
@@ -247,13 +247,8 @@ def _gather(d: Dressing, state, garment: int):
     low = inner[x[inner, 2] < top + TUCK_BELOW]
     if d.contacts.body is None or not len(low):
         return state
-    band = np.floor(x[low, 2] / TUCK_ROW).astype(np.int64)
-    _, row = np.unique(band, return_inverse=True)
-    centre = np.stack([np.bincount(row, x[low, k]) / np.bincount(row) for k in range(2)], axis=1)[row]
-    inward = x[low].copy()
-    inward[:, :2] = 0.5 * (inward[:, :2] + centre)
-    found, _, _, out = d.contacts.body.push_out(inward, d.timeline.pose, 0, clearance=g.thickness, reach=TUCK_REACH)
-    low, target = low[found], out
+    found, target = tuck_targets(x[low], d.timeline.pose, d.contacts.body.faces, clearance=g.thickness, row=TUCK_ROW)
+    low = low[found]
     g.tuck(low, garment)
     d.gathering = (low, x[low], target, float(state.t))
     state = g.rebuild(state)
