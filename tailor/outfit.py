@@ -183,11 +183,14 @@ def garment_of_vertex(pattern: Pattern, vertex_panel) -> np.ndarray:
     return out
 
 
-def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02) -> np.ndarray:
+def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02, loose=None) -> np.ndarray:
     """(G, G) counts: entry (i, j), i < j, is how many of garment j's vertices lie within ``reach``
     [m] of garment i's and nearer the body than the nearest of them — an outer garment's cloth
     inside an inner one's. All zero when every garment keeps its layer. ``garment`` is
     :func:`garment_of_vertex`; distances to the body are :func:`tailor.collide.body_gap`'s.
+    ``loose`` (N,) int, optional: per vertex, a garment it keeps no order against (a tucked top's
+    cloth above the band, which may lie over it: :meth:`tailor.dress.garment.Garment.untucked`);
+    a vertex whose nearest is such a vertex of the other garment is not counted.
     """
     from scipy.spatial import cKDTree
 
@@ -202,8 +205,12 @@ def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02) -> np.n
         for j in range(i + 1, count):
             outer = np.flatnonzero(garment == j)
             d, k = tree.query(x[outer], distance_upper_bound=reach)
-            found = np.isfinite(d)
-            near.append((i, j, outer[found], inner[k[found]]))
+            found = np.flatnonzero(np.isfinite(d))
+            pair_outer, pair_inner = outer[found], inner[k[found]]
+            if loose is not None:
+                keep = (loose[pair_inner] != j) & (loose[pair_outer] != i)
+                pair_outer, pair_inner = pair_outer[keep], pair_inner[keep]
+            near.append((i, j, pair_outer, pair_inner))
     ids = np.unique(np.concatenate([np.r_[a, b] for _, _, a, b in near] + [np.zeros(0, np.intp)]))
     gap = np.zeros(len(x))
     if len(ids):  # the body's distance only where two garments overlap: the costly query

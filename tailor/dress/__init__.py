@@ -218,7 +218,9 @@ def _out_of_layer(d: Dressing, body) -> list | None:
     if not pattern.pieces or d.topology:
         return None
     garment = garment_of_vertex(pattern, mesh.vertex_panel)
-    return [int(out_of_order(x, garment, bx, body.faces).sum()) for x, bx in zip(d.frames, d.body_frames)]
+    loose = d.garment.untucked()
+    loose = None if loose is None else loose[d.garment.weld]  # the frames' (mesh) numbering
+    return [int(out_of_order(x, garment, bx, body.faces, loose=loose).sum()) for x, bx in zip(d.frames, d.body_frames)]
 
 
 def _close(report: DrapeReport, d: Dressing, t_start: float, body) -> None:
