@@ -243,9 +243,11 @@ def tuck_targets(points, body_x, body_faces, *, clearance: float, row: float):
     ids, targets = [], []
     for k, polys in enumerate(outlines):
         mine = np.flatnonzero(which == k)
+        if len(mine) < 3 or not polys:
+            continue
         loop = MultiPoint([tuple(p) for p in points[mine, :2]]).convex_hull
-        inside = [p for p in polys or () if loop.contains(Point(p.centroid.coords[0]))]
-        if len(mine) < 3 or not inside:
+        inside = [p for p in polys if loop.contains(Point(p.centroid.coords[0]))]
+        if not inside:
             continue
         hull = MultiPoint([c for p in inside for c in p.exterior.coords]).convex_hull
         xy = _radially_onto(np.asarray(hull.exterior.coords)[:-1], np.asarray(hull.centroid.coords[0]), points[mine, :2], clearance)

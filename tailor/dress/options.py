@@ -114,7 +114,7 @@ TUCK_BELOW = 0.02
 TUCK_GATHER_TIME = 0.2
 """[s] of sewing over which a tuck's cloth is carried onto the body (at once, rows fold over each other)."""
 TUCK_ROW = 0.02
-"""[m] Height of the rows whose loop centre a tuck draws the cloth toward."""
+"""[m] Height of the rows a tuck draws in, each onto the hull of the body its loop encloses."""
 
 
 @dataclass(frozen=True, slots=True)
