@@ -353,6 +353,29 @@ def test_a_tucked_t_shirt_walks_inside_the_trousers_band(tmp_path, resolution, f
     assert np.count_nonzero(d < 0.03) > 30
 
 
+def test_a_tucked_tops_cloth_outside_its_tuck_is_loose_against_the_band_only_while_walking():
+    """Garment.untucked: the top's cloth not tucked is loose against the garment tucking it, the
+    tucked cloth and the bottom are not; the contacts are told so in the moving phases only (the
+    layer rule holds everywhere while the outfit settles)."""
+    from tailor.dress.options import MOTION, SETTLING
+
+    body = read_body("mannequin")
+    pattern = outfit(_patterns("trousers", "tshirt"), tuck=True)
+    d, _, x0 = prepare(pattern, body, DrapeOptions(resolution=0.08))
+    g = d.garment
+    assert g.untucked() is None
+    top = g.garment_vertices(0)
+    tucked = top[:10]
+    g.tuck(tucked, 1)
+    loose = g.untucked()[g.weld]
+    assert (loose[tucked] == -1).all() and (loose[np.setdiff1d(top, tucked)] == 1).all()
+    assert (loose[g.garment_vertices(1)] == -1).all()
+    d.enter(SETTLING)
+    assert d.contacts.self_collider(g.model, x0, body.vertices).layers.loose is None
+    d.enter(MOTION)
+    np.testing.assert_array_equal(d.contacts.self_collider(g.model, x0, body.vertices).layers.loose, g.untucked())
+
+
 def test_a_tuck_draws_a_hem_round_both_legs_in_at_its_own_height():
     """tuck_targets: a hem loop round two legs goes straight in onto their hull, a clearance out:
     heights kept, the order round the loop kept (no fold), nothing drawn into the gap between
