@@ -84,8 +84,11 @@ class Layers:
         between = np.flatnonzero(~free)
         if not len(between):
             return out
-        normal = vertex_normals(x, faces, self.face_out)  # pointing out, away from the body
         p = pairs[between]
+        needed = np.zeros(len(x), bool)
+        needed[p.ravel()] = True
+        touch = np.flatnonzero(needed[faces].any(axis=1))  # every face at a vertex asked about, no other
+        normal = vertex_normals(x, faces[touch], np.asarray(self.face_out)[touch])  # pointing out, away from the body
         a_outside = (la[between] > lb[between])[:, None]
         out[between] = np.where(a_outside, normal[p[:, 2]] + normal[p[:, 3]], -(normal[p[:, 0]] + normal[p[:, 1]]))
         return out
