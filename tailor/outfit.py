@@ -23,8 +23,11 @@ handles one garment:
   its own garment's fabric.
 * **Tucked** (``outfit(..., tuck=True)``): a top's hem inside a bottom's waistband. The garments held
   at the waist go outside the top, and when such a garment is placed over the sewn top, the top's
-  cloth its band will cover is gathered onto the body and held there while the band sews
-  (:func:`tailor.dress.phases.sew`), then let go under the band.
+  cloth its band will cover is gathered onto the body (each row straight in onto the body's hull,
+  :func:`tuck_targets`) and held there while the band sews (:func:`tailor.dress.phases.sew`), then
+  let go under the band; above the band the top may blouse over it, so there the layer rule
+  gives way to the side the cloth is on while the body moves
+  (:meth:`tailor.dress.garment.Garment.untucked`).
 * **Contact between garments** is self-contact of the outfit's one mesh: perfectly inelastic
   (Carignan Eq. 5–8), over the same broad and narrow phases (:mod:`tailor.collide.cloth`), with
   the layer rule as a one-sided constraint once sewn (:class:`~tailor.collide.Layers`): a pair of
