@@ -87,7 +87,8 @@ class Dressing:
         return 1.0 / self.options.fps
 
     def enter(self, phase: PhaseSettings) -> None:
-        """Settings of ``phase`` for the integrator, the contacts and the step loop."""
+        """Settings of ``phase`` for the integrator, the contacts (their constraints too,
+        :meth:`constrain`) and the step loop."""
         self.phase = phase
         wind = self.options.wind if phase.wind else None
         self.integrator.configure(SolverSettings(phase.tolerance or self.quality.tolerance, phase.max_stretch_change, wind))
@@ -289,8 +290,7 @@ def settle(d: Dressing, state):
     state, d.attachments = d.garment.attach(state, d.contacts.body, d.timeline.pose)
     d.held_heights = d.gathering = None
     d.contacts.follow(d.garment.friction, state.x)
-    d.constrain()
-    d.enter(SETTLING)
+    d.enter(SETTLING)  # and the constraints of the new numbering (Dressing.enter)
     count, still, done = int(round(d.options.settle * d.options.fps)), 0, 0
     while done < count and still < REST_FRAMES:
         state = d.advance(state, d.frame_dt)
