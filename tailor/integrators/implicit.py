@@ -204,24 +204,20 @@ class ImplicitEuler(IntegratorBase):
         return block_pcg(system.bptr, system.bcol, system.blocks, system.rhs, dv, system.pinv, self.settings.tolerance,
                          self.max_iterations, ids, n, held.stick)
 
-    def _release_pulled(self, system, dv, v, held, let_go):
-        """Let go the held contacts the body would have to pull on and solve again.
+    def _release_pulled(self, system, dv, held, let_go):
+        """Let go the held contacts the body would have to pull on (the cloth leaves the body there).
 
-        Returns (held, let_go, reactions, normal reactions, iterations, converged)."""
+        Returns (held, let_go, the others' reactions, their normal reactions, whether any was let go):
+        the reactions are the solve's before the release, which the next solve (after friction and
+        landings are judged on them too) brings up to date."""
         r = system.reactions(dv, held)
         rn = np.einsum("ij,ij->i", r, held.normals)
         pulled = rn < 0.0
         if not pulled.any():
-            return held, let_go, r, rn, 0, True
-        # the cloth leaves the body here: solve again before judging friction
+            return held, let_go, r, rn, False
         let_go = np.concatenate([let_go, held.ids[pulled]])
-        held = held.take(~pulled)
         self.counters.released += int(pulled.sum())
-        iterations, converged = self._solve(system, dv, v, held)
-        if not converged:
-            return held, let_go, r, rn, iterations, False
-        r = system.reactions(dv, held)
-        return held, let_go, r, np.einsum("ij,ij->i", r, held.normals), iterations, True
+        return held.take(~pulled), let_go, r[~pulled], rn[~pulled], True
 
     def _slip(self, system, held, r, rn) -> bool:
         """Stuck contacts whose reaction leaves the Coulomb cone slide, keeping the friction they
@@ -273,11 +269,8 @@ class ImplicitEuler(IntegratorBase):
         for _ in range(self.contact_passes):
             changed = False
             if len(held):
-                held, let_go, r, rn, extra, converged = self._release_pulled(system, dv, v, held, let_go)
-                iterations += extra
-                if not converged:
-                    break
-                changed = self._slip(system, held, r, rn)
+                held, let_go, r, rn, changed = self._release_pulled(system, dv, held, let_go)
+                changed = self._slip(system, held, r, rn) or changed
             if predict is not None:
                 held, landed = self._landing(model, state, dt, dv, held, let_go, predict)
                 changed = changed or landed
