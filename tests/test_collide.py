@@ -62,7 +62,7 @@ def test_signed_distance_round_a_box_agrees_with_the_exact_one_on_edges_corners_
     every = np.arange(len(box.faces))
     ptr = np.arange(len(points) + 1, dtype=np.int64) * len(every)
     for order in (every, every[::-1]):  # whichever of the equally close triangles comes first
-        dist, tri, _, normal = collider._closest(points, ptr, np.tile(order, len(points)), np.asarray(box.vertices))
+        dist, tri, _, normal = collider._closest(points, (ptr[:-1], ptr[1:], np.tile(order, len(points))), np.asarray(box.vertices))
         assert np.all(tri >= 0)
         assert np.allclose(dist, exact, atol=1e-9)
         out = dist > 1e-6
@@ -197,6 +197,11 @@ def test_friction_moves_a_vertex_only_for_the_part_of_the_step_after_it_landed()
         assert np.allclose(travel, (dt - after) * 0.5 + after * slowed)
 
 
+def _pairs(lo, hi, tri):
+    """{(vertex, triangle)} of a body collider's candidates: vertex i's are ``tri[lo[i]:hi[i]]``."""
+    return {(i, int(t)) for i in range(len(lo)) for t in tri[lo[i]:hi[i]]}
+
+
 def test_kept_body_candidates_hold_every_triangle_within_half_the_margin_as_the_body_walks():
     """Candidates kept across body frames (the cloth and the trunk move together, an arm swings by)
     still hold every triangle within half the margin, and the walk asks about far fewer points."""
@@ -218,10 +223,7 @@ def test_kept_body_candidates_hold_every_triangle_within_half_the_margin_as_the_
         moving = (1 - a) * (frames[i][ids] + offset * normals[i]) + a * (frames[j][ids] + offset * normals[j])
         x = np.concatenate([moving, still])
         frame = int(round(s))
-        ptr, tri = kept.candidates(x, frame)
-        eptr, etri = exact.candidates(x, frame, cache=False)
-        have = set(zip(np.repeat(np.arange(len(x)), np.diff(ptr)).tolist(), tri.tolist()))
-        need = set(zip(np.repeat(np.arange(len(x)), np.diff(eptr)).tolist(), etri.tolist()))
+        have, need = (_pairs(*c.candidates(x, frame, cache=c is kept)) for c in (kept, exact))
         assert need <= have, f"step {step}: {len(need - have)} pairs within half the margin missing"
     # asking again on every new frame would ask about every point 24 times (and more between frames)
     assert kept.queried_points < 0.75 * len(x) * (len(frames) - 1)

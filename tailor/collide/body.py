@@ -20,12 +20,21 @@ def _same(a, b) -> bool:
 
 
 class _Kept:
-    """The body collider's cached candidates: per vertex the triangles found within the margin, where
+    """The body collider's cached candidates: per vertex the triangles found within the margin (the
+    first ``count[i]`` of row ``i`` of ``slots``: a vertex asked again rewrites its own row only), where
     the vertex was when its budget was last counted (``ref``) and how much of half the margin it has
     left there (``slack`` [m]), and the body frame they were counted on."""
 
-    def __init__(self, frame, ref, slack, keys, csr):
-        self.frame, self.ref, self.slack, self.keys, self.csr = frame, ref, slack, keys, csr
+    def __init__(self, frame, x):
+        n = len(x)
+        self.frame, self.ref, self.slack = frame, x.copy(), np.zeros(n)
+        self.slots = np.zeros((n, 0), np.int32)
+        self.count = np.zeros(n, np.int64)
+        self._lo = np.zeros(n, np.int64)
+
+    def spans(self):
+        """(lo, hi, tri): vertex i's candidate triangles are ``tri[lo[i]:hi[i]]``."""
+        return self._lo, self._lo + self.count, self.slots.reshape(-1)
 
     def spend(self, drift, x, frame) -> None:
         """The body frame changed to ``frame`` with the vertices at ``x``: ``drift`` (per vertex) is spent."""
@@ -33,11 +42,22 @@ class _Kept:
         self.ref = x.copy()
         self.frame = frame
 
-    def renew(self, ids, x, keys, csr, slack) -> None:
-        """Vertices ``ids`` were asked about again at ``x``: their whole budget ``slack`` back; the new CSR."""
+    def renew(self, ids, x, keys, face_count: int, slack) -> None:
+        """Vertices ``ids`` (sorted) were asked about again at ``x``: their whole budget ``slack`` back,
+        and as their candidates the triangles of ``keys`` (sorted ``vertex · F + triangle``)."""
         self.ref[ids] = x[ids]
         self.slack[ids] = slack
-        self.keys, self.csr = keys, csr
+        vertex, tri = keys // face_count, keys % face_count
+        start = np.searchsorted(vertex, ids)
+        count = np.searchsorted(vertex, ids, side="right") - start
+        width = int(count.max(initial=0))
+        if width > self.slots.shape[1]:  # rows widened (a quarter more, so that this is rare)
+            grown = np.zeros((len(self.count), max(width, (5 * self.slots.shape[1]) // 4)), np.int32)
+            grown[:, :self.slots.shape[1]] = self.slots
+            self.slots = grown
+            self._lo = np.arange(len(self.count), dtype=np.int64) * grown.shape[1]
+        self.count[ids] = count
+        self.slots[vertex, np.arange(len(keys)) - np.repeat(start, count)] = tri
 
 
 class _Seen:
@@ -104,7 +124,7 @@ class BodyCollider:
         return self._boxes[frame]
 
     def candidates(self, x, frame: int, *, cache: bool = True):
-        """CSR (ptr, tri) of body triangles within ``margin`` of each vertex (FCL broad phase).
+        """(lo, hi, tri): the body triangles within ``margin`` of vertex i are ``tri[lo[i]:hi[i]]`` (FCL broad phase).
 
         With ``cache`` each vertex keeps its answer while it is certain to hold every triangle
         within half the margin: a vertex asked about has half the margin to spend, and spends what
@@ -118,22 +138,20 @@ class BodyCollider:
                                      "try a smaller time step or the implicit integrator")
         c = self._cache
         if not cache or c is None or c.ref.shape != x.shape:
-            keys = self._query(x, frame, np.arange(len(x)))
-            csr = self._csr(keys, len(x))
-            if cache:
-                self._cache = _Kept(frame, x.copy(), np.full(len(x), 0.5 * self.margin), keys, csr)
-            return csr
+            every = np.arange(len(x))
+            keys = self._query(x, frame, every)
+            if not cache:
+                return self._spans(keys, len(x))
+            c = self._cache = _Kept(frame, x)
+            c.renew(every, x, keys, len(self.faces), 0.5 * self.margin)
+            return c.spans()
         if c.frame != frame:
             c.spend(self._drift(c.frame, frame).relative(x, x - c.ref), x, frame)
         step = x - c.ref
         moved = np.flatnonzero(np.einsum("ij,ij->i", step, step) >= np.maximum(c.slack, 0.0) ** 2)
         if len(moved):
-            mask = np.zeros(len(x), bool)
-            mask[moved] = True
-            keys = np.concatenate([c.keys[~mask[c.keys // len(self.faces)]], self._query(x[moved], frame, moved)])
-            keys.sort(kind="stable")  # by vertex; two sorted runs: a stable (merge) sort is far quicker
-            c.renew(moved, x, keys, self._csr(keys, len(x)), 0.5 * self.margin)
-        return c.csr
+            c.renew(moved, x, self._query(x[moved], frame, moved), len(self.faces), 0.5 * self.margin)
+        return c.spans()
 
     def _drift(self, a: int, b: int):
         """The body's :class:`BodyDrift` from frame ``a`` to ``b`` within the margin (the last few kept)."""
@@ -152,18 +170,19 @@ class BodyCollider:
             kept = self._inside_test = (np.array(body_x, float), InsideTest(body_x, self.faces))
         return kept[1](points)
 
-    def _csr(self, keys, n):
-        """(ptr, tri) of sorted keys ``vertex · F + triangle`` over ``n`` vertices."""
+    def _spans(self, keys, n):
+        """(lo, hi, tri) of sorted keys ``vertex · F + triangle`` over ``n`` vertices: vertex i's
+        triangles are ``tri[lo[i]:hi[i]]``."""
         ptr = np.concatenate([[0], np.cumsum(np.bincount(keys // len(self.faces), minlength=n))]).astype(np.int64)
-        return ptr, keys % len(self.faces)
+        return ptr[:-1], ptr[1:], keys % len(self.faces)
 
-    def _closest(self, x, ptr, tri, body_x, rows=None):
+    def _closest(self, x, spans, body_x, rows=None):
         """Narrow phase: signed distance, triangle (−1: none), barycentrics and normal per point
         (of the points ``rows`` only, if given: the others get none)."""
         n = len(x)
         dist, tri_out, bary, normal = np.full(n, np.inf), np.full(n, -1, np.int64), np.zeros((n, 3)), np.zeros((n, 3))
         rows = np.arange(n, dtype=np.int64) if rows is None else np.asarray(rows, np.int64)
-        nearest_into(np.ascontiguousarray(x), ptr, tri, np.ascontiguousarray(body_x), self.faces, dist, tri_out, bary, normal, rows)
+        nearest_into(np.ascontiguousarray(x), *spans, np.ascontiguousarray(body_x), self.faces, dist, tri_out, bary, normal, rows)
         dist[tri_out < 0] = np.inf
         return dist, tri_out, bary, normal
 
@@ -182,14 +201,14 @@ class BodyCollider:
 
         Vertices with no body triangle within the margin get triangle −1 and distance +inf.
         """
-        found = self._closest(x, *self.candidates(x, frame, cache=cache), body_x)
+        found = self._closest(x, self.candidates(x, frame, cache=cache), body_x)
         return self._confirm_deep(x, found, body_x) if cache else found  # uncached: complete within the margin
 
     def nearest_within(self, x, body_x, frame: int, radius: float):
         """As :meth:`nearest` uncached, but within ``radius`` [m] of each point instead of the margin
         (triangle −1 and distance +inf beyond it): one body broad phase asked at several radii."""
         keys = self._query(np.asarray(x, float), frame, np.arange(len(x)), radius=radius)
-        return self._closest(x, *self._csr(keys, len(x)), body_x)
+        return self._closest(x, self._spans(keys, len(x)), body_x)
 
     def _confirm_deep(self, x, found, body_x):
         """``found`` with the vertices read deeper than half the margin checked against the closed surface.
@@ -240,7 +259,7 @@ class BodyCollider:
         if not len(inside):
             return inside, inside, np.zeros((0, 3)), np.zeros((0, 3))
         keys = self._query(points[inside], frame, np.arange(len(inside)), radius=reach)
-        dist, tri, bary, normal = self._closest(points[inside], *self._csr(keys, len(inside)), body_x)
+        dist, tri, bary, normal = self._closest(points[inside], self._spans(keys, len(inside)), body_x)
         ok = (tri >= 0) & (dist < 0.0)
         out = points[inside[ok]] + (_at(clearance, inside[ok]) - dist[ok])[:, None] * normal[ok]
         return inside[ok], tri[ok], bary[ok], out
@@ -260,7 +279,7 @@ class BodyCollider:
         if skip is not None and len(skip):
             test[skip] = False
         rows = np.flatnonzero(test & ~self._out_of_reach(x_end, body_x, thickness))
-        dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, *self.candidates(x_end, frame), body_x, rows),
+        dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, self.candidates(x_end, frame), body_x, rows),
                                                      body_x)
         close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
         if not len(close):

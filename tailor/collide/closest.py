@@ -88,7 +88,7 @@ TIE = 1e-9
 
 
 @njit(cache=True, parallel=True)
-def nearest_into(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal, rows):
+def nearest_into(x, lo, hi, tri, bx, faces, out_dist, out_tri, out_bary, out_normal, rows):
     """Closest body triangle per point, its signed distance and the outward normal there.
 
     Over an edge or a vertex several triangles are equally close. The side is the vote of the one
@@ -96,7 +96,8 @@ def nearest_into(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal
     box's corner, level with one of its faces, would read inside from that face's zero vote).
     Equally close triangles with different closest points (a point inside a body, on the medial
     plane between two faces) average their directions, so the push does not depend on the order
-    of the triangles (a symmetric drop stays symmetric). Only the points ``rows`` are looked at."""
+    of the triangles (a symmetric drop stays symmetric). Only the points ``rows`` are looked at, point
+    i against the triangles ``tri[lo[i]:hi[i]]``."""
     for j in prange(len(rows)):
         i = rows[j]
         best = 1e30
@@ -105,7 +106,7 @@ def nearest_into(x, ptr, tri, bx, faces, out_dist, out_tri, out_bary, out_normal
         vote = -1.0
         side = 1.0
         v0 = v1 = v2 = 0.0
-        for k in range(ptr[i], ptr[i + 1]):
+        for k in range(lo[i], hi[i]):
             t = tri[k]
             a, b, c = bx[faces[t, 0]], bx[faces[t, 1]], bx[faces[t, 2]]
             if _box_distance2(x[i], a, b, c) > (best * (1.0 + TIE) + 1e-30) * (1.0 + 1e-12):
