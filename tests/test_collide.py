@@ -292,3 +292,25 @@ def test_vertices_that_moved_inside_after_a_response_are_still_rescued():
     state.x[2] -= [0.0, 0.0, 0.004]  # one 4 mm down: still outside, but no longer surely
     assert collider.rescue(model, state, body, np.zeros_like(body), 0, thickness=0.002) == 2
     assert np.all(np.linalg.norm(state.x[:2], axis=1) > 0.2)
+
+
+def test_a_broad_phase_over_a_span_of_walking_frames_finds_at_each_frame_the_pairs_of_that_frame_alone():
+    """The body's FCL boxes are built once per BODY_SPAN frames, round where each triangle is over
+    them; each frame is still asked exactly (its own triangles), not the span's boxes."""
+    from tailor import read_body
+    from tailor.collide import TriangleBoxes, clustered_query
+    from tailor.collide.body import BODY_SPAN
+
+    walk = read_body("mannequin-walk")
+    frames, faces = walk.frames, walk.faces
+    rng = np.random.default_rng(3)
+    ids = rng.choice(frames.shape[1], 800, replace=False)
+    collider = BodyCollider(frames, faces, margin=0.03)
+    for frame in (0, 3, BODY_SPAN - 1, BODY_SPAN + 2):
+        normals = trimesh.Trimesh(frames[frame], faces, process=False).vertex_normals[ids]
+        points = frames[frame][ids] + rng.uniform(-0.01, 0.04, (len(ids), 1)) * normals
+        keys = collider._query(points, frame, np.arange(len(points)))
+        point, tri = clustered_query(points, 0.03, TriangleBoxes(frames[frame], faces))
+        assert len(keys) > 10 * len(points)
+        assert np.array_equal(keys, np.sort(point * len(faces) + tri)), f"frame {frame}"
+    assert len(collider._boxes) == 2  # two spans asked: two broad phases built, not four

@@ -5,13 +5,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SimulationUnstable
-from .broad import BOX_CELL, NearCubes, TriangleBoxes, clustered_query
+from .broad import BOX_CELL, NearCubes, TriangleBoxes, TriangleGeometry, clustered_query
 from .closest import nearest_into
 from .contacts import NO_CONTACTS, Contacts
 from .drift import BodyDrift
 from .inside import InsideTest
 
-__all__ = ["BodyCollider", "body_gap", "GAP_REACH"]
+__all__ = ["BodyCollider", "body_gap", "GAP_REACH", "BODY_SPAN"]
+
+BODY_SPAN = 16
+"""Body frames one FCL broad phase of the body serves (:meth:`BodyCollider._body`): a walk builds its
+boxes, and learns which of them lie near each cube of space, once per span instead of every frame."""
 
 
 def _same(a, b) -> bool:
@@ -83,7 +87,7 @@ class BodyCollider:
 
     FCL finds the body triangles within ``margin`` of every cloth vertex, by clusters: boxes
     round nearby cloth vertices against boxes round nearby body triangles
-    (:func:`clustered_query`, built once per body frame). Those candidates
+    (:func:`clustered_query`, built once per :data:`BODY_SPAN` body frames). Those candidates
     are kept while no cloth vertex has moved more than half the margin and the body frame is the
     same; each step a compiled narrow phase finds, on the body as it is at that instant, the
     closest point, its barycentric coordinates and the outward normal.
@@ -99,7 +103,8 @@ class BodyCollider:
         self.frames = np.asarray(frames, float)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.margin = float(margin)
-        self._boxes = {}  # body frame → its broad phase
+        self._boxes = {}  # span of body frames (frame // BODY_SPAN) → its broad phase
+        self._geometry = {}  # body frame → its triangles (TriangleGeometry)
         self._cache: _Kept | None = None  # each vertex's candidates and what is left of its margin
         self._drifts = {}  # (frame, frame) → the body's BodyDrift between them
         self._previous = None  # signed distance of every vertex after the last response
@@ -115,13 +120,23 @@ class BodyCollider:
         self._previous = None
         self._seen = None
 
-    def _body(self, frame) -> NearCubes:
-        """The body at ``frame`` as the margin's FCL broad phase (the last two frames kept)."""
-        if frame not in self._boxes:
-            if len(self._boxes) >= 2:  # a walk moves on frame by frame: keep the last two, not all
+    def _body(self, frame):
+        """(broad phase, triangles) of the body at ``frame``: the margin's FCL broad phase of its span of
+        :data:`BODY_SPAN` frames (built round where each triangle is over them, so that the cubes it
+        learns serve the whole span) and the frame's own triangles, which the query tests exactly
+        (the last two of each kept: a walk moves on frame by frame)."""
+        span = frame // BODY_SPAN
+        if span not in self._boxes:
+            if len(self._boxes) >= 2:
                 self._boxes.pop(next(iter(self._boxes)))
-            self._boxes[frame] = NearCubes(TriangleBoxes(self.frames[frame], self.faces, BOX_CELL), self.margin)
-        return self._boxes[frame]
+            f = self.frames[span * BODY_SPAN:(span + 1) * BODY_SPAN]
+            boxes = TriangleBoxes(f[0], self.faces, BOX_CELL, vertex_boxes=(f.min(axis=0), f.max(axis=0)))
+            self._boxes[span] = NearCubes(boxes, self.margin)
+        if frame not in self._geometry:
+            if len(self._geometry) >= 2:
+                self._geometry.pop(next(iter(self._geometry)))
+            self._geometry[frame] = TriangleGeometry(self.frames[frame], self.faces)
+        return self._boxes[span], self._geometry[frame]
 
     def candidates(self, x, frame: int, *, cache: bool = True):
         """(lo, hi, tri): the body triangles within ``margin`` of vertex i are ``tri[lo[i]:hi[i]]`` (FCL broad phase).
@@ -188,8 +203,9 @@ class BodyCollider:
 
     def _query(self, points, frame, ids, radius=None):
         """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of ``points``."""
-        near = self._body(frame)
-        point, tri = near.query(points) if radius is None else clustered_query(points, radius, near.target)
+        near, geometry = self._body(frame)
+        point, tri = (near.query(points, geometry) if radius is None
+                      else clustered_query(points, radius, near.target, geometry=geometry))
         self.queries += 1
         self.queried_points += len(points)
         keys = np.asarray(ids, np.int64)[point] * len(self.faces) + tri

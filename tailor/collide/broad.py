@@ -14,7 +14,7 @@ from numba import njit, prange
 
 from .closest import closest_barycentric
 
-__all__ = ['bvh_object', 'boxes', 'manager_contacts', 'sphere_query', 'clustered_query', 'corner_bounds', 'run_starts', 'TriangleBoxes', 'NearCubes', 'BOX_CELL', 'POINT_CELL']
+__all__ = ['bvh_object', 'boxes', 'manager_contacts', 'sphere_query', 'clustered_query', 'corner_bounds', 'run_starts', 'TriangleBoxes', 'TriangleGeometry', 'NearCubes', 'BOX_CELL', 'POINT_CELL']
 
 
 def bvh_object(vertices, faces):
@@ -121,29 +121,39 @@ triangles' cubes, since each points' box is grown by the radius on every side (a
 pairs against a body, the same pairs found: docs/measurements.md)."""
 
 
+class TriangleGeometry:
+    """A triangle mesh's triangles at one instant, as a query's test reads them: ``corners`` (F, 3, 3)
+    and each triangle's bounding box ``lo``, ``hi`` (F, 3) — or, with ``vertex_boxes`` (lo, hi), each
+    (V, 3), the box round its corners' boxes (where they are over a span: a box, no longer exact)."""
+
+    def __init__(self, vertices, faces, vertex_boxes=None):
+        faces = np.asarray(faces, dtype=np.int64)
+        self.corners = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64)[faces])
+        if vertex_boxes is None:
+            self.lo, self.hi = corner_bounds(self.corners)
+        else:
+            self.lo, self.hi = corner_bounds(vertex_boxes[0][faces])[0], corner_bounds(vertex_boxes[1][faces])[1]
+
+
 class TriangleBoxes:
     """A triangle mesh's triangles binned by centroid into cubes of side ``cell``, one FCL box each.
 
     The target side of :func:`clustered_query`: per triangle its bounding box, per cube the box
     round its triangles, in an FCL dynamic AABB tree. Build one per body frame (or cloth state).
-    With ``vertex_boxes`` (lo, hi), each (V, 3), a box per vertex (where it is over a step, say),
-    each triangle's box is the one round its corners' boxes.
+    With ``vertex_boxes`` (lo, hi), each (V, 3), a box per vertex (where it is over a step, or a
+    span of a body's frames), each triangle's box is the one round its corners' boxes: one target
+    serves every instant inside them, each asked with its own :class:`TriangleGeometry`.
     """
 
     def __init__(self, vertices, faces, cell: float = 0.06, vertex_boxes=None):
-        faces = np.asarray(faces, dtype=np.int64)
-        corners = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64)[faces])
-        self.corners = corners
-        if vertex_boxes is None:
-            self.lo, self.hi = corner_bounds(corners)
-        else:
-            self.lo, self.hi = corner_bounds(vertex_boxes[0][faces])[0], corner_bounds(vertex_boxes[1][faces])[1]
+        self.geometry = TriangleGeometry(vertices, faces, vertex_boxes)
+        self.lo, self.hi, self.corners = self.geometry.lo, self.geometry.hi, self.geometry.corners
         self.swept = vertex_boxes is not None
         self.order, self.ptr = np.zeros(0, np.int64), np.zeros(1, np.int64)
         self.manager, self.index = None, {}
-        if not len(corners):
+        if not len(self.corners):
             return
-        order, self.ptr, _, _ = _cluster(corners.mean(axis=1), cell)
+        order, self.ptr, _, _ = _cluster(self.corners.mean(axis=1), cell)
         self.order = order.astype(np.int64)
         geoms, transforms = boxes(np.minimum.reduceat(self.lo[self.order], self.ptr[:-1], axis=0),
                                   np.maximum.reduceat(self.hi[self.order], self.ptr[:-1], axis=0))
@@ -156,7 +166,7 @@ class TriangleBoxes:
         return len(self.lo)
 
 
-def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = POINT_CELL, point_boxes=None):
+def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = POINT_CELL, point_boxes=None, geometry=None):
     """(point, triangle) index pairs of ``target``'s triangles within ``radius`` of each point (FCL, by clusters).
 
     The FCL broad phase by clusters on both sides. python-fcl builds one Python object per
@@ -172,7 +182,9 @@ def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = POIN
 
     With ``point_boxes`` (lo, hi) round the points and a ``target`` built with vertex boxes (each
     box holding where its point or vertex is over a step): the pairs whose boxes come within
-    ``radius`` — a superset of the pairs that come that near at any moment in them.
+    ``radius`` — a superset of the pairs that come that near at any moment in them. With
+    ``geometry`` (:class:`TriangleGeometry`: the triangles at one instant inside those boxes) and
+    points, not boxes: exactly the pairs within ``radius`` at that instant.
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     if not len(points) or not len(target):
@@ -187,9 +199,10 @@ def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = POIN
     for k, c in enumerate(contacts):
         a = mine.get(id(c.o1))
         pairs[k] = (a, theirs[id(c.o2)]) if a is not None else (mine[id(c.o2)], theirs[id(c.o1)])
-    exact = point_boxes is None and not target.swept
+    g = target.geometry if geometry is None else geometry
+    exact = point_boxes is None and (geometry is not None or not target.swept)
     return _expand_boxes(pairs, p_ptr, p_order.astype(np.int64), target.ptr, target.order, np.ascontiguousarray(lo),
-                         np.ascontiguousarray(hi), target.lo, target.hi, target.corners, float(radius), exact)
+                         np.ascontiguousarray(hi), g.lo, g.hi, g.corners, float(radius), exact)
 
 
 class NearCubes:
@@ -214,14 +227,16 @@ class NearCubes:
         self._boxes = np.zeros(0, np.int64)
         self.fcl_calls = 0
 
-    def query(self, points):
-        """(point, triangle) index pairs of the target's triangles within the radius of each point."""
+    def query(self, points, geometry=None):
+        """(point, triangle) index pairs of the target's triangles within the radius of each point
+        (as they are in ``geometry``, :class:`TriangleGeometry`, if given: any instant inside the
+        target's boxes; else as the target was built)."""
         points = np.ascontiguousarray(points, dtype=np.float64)
         if not len(points) or not len(self.target):
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         cube = np.floor(points / self.cell)
         if np.abs(cube).max() >= self.LATTICE:  # too far out for a key: no lattice
-            return clustered_query(points, self.radius, self.target, cell=self.cell)
+            return clustered_query(points, self.radius, self.target, cell=self.cell, geometry=geometry)
         cube = cube.astype(np.int64) + self.LATTICE
         key = (cube[:, 0] << 42) | (cube[:, 1] << 21) | cube[:, 2]
         order = np.argsort(key, kind="stable").astype(np.int64)
@@ -235,8 +250,9 @@ class NearCubes:
         first = np.repeat(self._ptr[at] - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
         pairs[:, 1] = self._boxes[first + np.arange(len(pairs))]
         t = self.target
+        g = t.geometry if geometry is None else geometry
         return _expand_boxes(pairs, np.append(starts, len(key)).astype(np.int64), order, t.ptr, t.order, points, points,
-                             t.lo, t.hi, t.corners, self.radius, True)
+                             g.lo, g.hi, g.corners, self.radius, geometry is not None or not t.swept)
 
     def _learn(self, cubes) -> None:
         """Ask FCL about the ``cubes`` (sorted keys) not yet known."""
