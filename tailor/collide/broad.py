@@ -146,24 +146,23 @@ class TriangleBoxes:
     """
 
     def __init__(self, vertices, faces, cell: float = 0.06, vertex_boxes=None):
-        self.geometry = TriangleGeometry(vertices, faces, vertex_boxes)
-        self.lo, self.hi, self.corners = self.geometry.lo, self.geometry.hi, self.geometry.corners
+        tris = self.geometry = TriangleGeometry(vertices, faces, vertex_boxes)
         self.swept = vertex_boxes is not None
         self.order, self.ptr = np.zeros(0, np.int64), np.zeros(1, np.int64)
         self.manager, self.index = None, {}
-        if not len(self.corners):
+        if not len(tris.corners):
             return
-        order, self.ptr, _, _ = _cluster(self.corners.mean(axis=1), cell)
+        order, self.ptr, _, _ = _cluster(tris.corners.mean(axis=1), cell)
         self.order = order.astype(np.int64)
-        geoms, transforms = boxes(np.minimum.reduceat(self.lo[self.order], self.ptr[:-1], axis=0),
-                                  np.maximum.reduceat(self.hi[self.order], self.ptr[:-1], axis=0))
+        geoms, transforms = boxes(np.minimum.reduceat(tris.lo[self.order], self.ptr[:-1], axis=0),
+                                  np.maximum.reduceat(tris.hi[self.order], self.ptr[:-1], axis=0))
         self.manager = fcl.DynamicAABBTreeCollisionManager()
         self.manager.registerObjects([fcl.CollisionObject(g, t) for g, t in zip(geoms, transforms)])
         self.manager.setup()
         self.index = {id(g): i for i, g in enumerate(geoms)}
 
     def __len__(self):
-        return len(self.lo)
+        return len(self.geometry.lo)
 
 
 def clustered_query(points, radius, target: TriangleBoxes, *, cell: float = POINT_CELL, point_boxes=None, geometry=None):

@@ -62,8 +62,9 @@ def _face_air(model, state, wind):
 
 
 def _face_wind(model, state, wind):
-    """The air's velocity [m/s] for :func:`~tailor.forces.kernels.air_into`: (1, 3) for all faces, or
-    (F, 3) per face (given so, or ``wind(points, t)`` at the face centres); still air if None."""
+    """The air's velocity [m/s] as :func:`_face_air` and :func:`~tailor.forces.kernels.air_forces_into`
+    take it: (1, 3) for all faces, or (F, 3) per face (given so, or ``wind(points, t)`` at the face
+    centres); still air if None."""
     if wind is None:
         return np.zeros((1, 3))
     if callable(wind):
