@@ -122,3 +122,25 @@ def test_binned_boxes_hold_exactly_the_boxes_meeting_each_cell_in_order():
         cell = np.array([a, b, c])
         expected = np.flatnonzero(np.all((first <= cell) & (cell <= last), axis=1))
         assert np.array_equal(items[ptr[key]:ptr[key + 1]], expected)
+
+
+def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_chunks_overflow():
+    """Each chunk of queries writes into room for a few pairs a query; a chunk that overflows (a dense
+    crumple) is written again in full. The pairs, and their order, are those of counting first."""
+    from tailor.collide.grid import _GUESS_CHUNK, _GUESS_PAIRS, _ee_pairs, _ee_pairs_guessed
+
+    rng = np.random.default_rng(6)
+    n = 4 * _GUESS_CHUNK
+    start = rng.uniform(0.0, 0.25, (n, 3))
+    start[:_GUESS_CHUNK] = rng.uniform(0.0, 0.03, (_GUESS_CHUNK, 3))  # the first chunk's edges crumpled together
+    x = np.stack([start, start + rng.normal(0.0, 0.01, (n, 3))], axis=1).reshape(-1, 3)
+    edges = np.arange(2 * n).reshape(-1, 2)
+    lo, hi = np.minimum(x[0::2], x[1::2]), np.maximum(x[0::2], x[1::2])
+    dirty = rng.random(n) < 0.8
+    grid = Grid(lo - 0.02, hi + 0.02, 0.02)
+    ring = (np.zeros(2 * n + 1, np.int64), np.zeros(0, np.int64))
+    args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02, *ring)
+    (want, want_near), (got, got_near) = _ee_pairs(*args), _ee_pairs_guessed(*args)
+    first = np.isin(want[:, 0] // 2, np.arange(_GUESS_CHUNK)).sum()
+    assert first > _GUESS_CHUNK * _GUESS_PAIRS and len(want) - first > 100  # one chunk overflowed, the others did not
+    assert np.array_equal(got, want) and np.array_equal(got_near, want_near)

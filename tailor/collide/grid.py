@@ -235,9 +235,11 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
 
 
 @njit(cache=True)
-def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin, cell, dims, r):
+def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin, cell, dims, r,
+            limit=-1):
     """Count (``fill`` False) or write the edges within ``r`` of edge ``q``, sharing no end: every
-    clean one, and the dirty ones after it (each dirty pair once)."""
+    clean one, and the dirty ones after it (each dirty pair once); with ``limit`` ≥ 0 none is written
+    at or beyond it (they are still counted)."""
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     r2 = r * r
@@ -257,7 +259,7 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                         continue
                     if not owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
                         continue
-                    if fill:
+                    if fill and (limit < 0 or start + found < limit):
                         out[start + found, 0] = a0
                         out[start + found, 1] = a1
                         out[start + found, 2] = b0
@@ -268,6 +270,51 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                                                    or _neighbours(ring_ptr, ring_idx, a1, b1))
                     found += 1
     return found
+
+
+_GUESS_CHUNK = 256
+"""Queries a chunk of :func:`_ee_pairs_guessed` takes in turn."""
+
+_GUESS_PAIRS = 16
+"""Pairs per query a chunk of :func:`_ee_pairs_guessed` has room for (a cloth edge meets about 8)."""
+
+
+@njit(cache=True, parallel=True)
+def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
+    """:func:`_ee_pairs` in one pass where it can: each chunk of :data:`_GUESS_CHUNK` queries writes
+    into room for :data:`_GUESS_PAIRS` pairs a query, and only a chunk that overflows is counted and
+    written again; the chunks' pairs are then joined in order (the same pairs, in the same order)."""
+    ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
+    nq = len(queries)
+    chunks = (nq + _GUESS_CHUNK - 1) // _GUESS_CHUNK
+    room = _GUESS_CHUNK * _GUESS_PAIRS
+    out = np.empty((chunks * room, 4), np.int64)
+    out_near = np.empty(chunks * room, np.bool_)
+    used = np.zeros(chunks, np.int64)
+    for ch in prange(chunks):
+        first, end = ch * room, (ch + 1) * room
+        written = 0
+        for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
+            written += _ee_one(queries[k], True, out, out_near, first + written, ring_ptr, ring_idx, ids, edges, e_lo, e_hi,
+                               dirty, ptr, items, origin, cell, dims, r, end)
+        used[ch] = written
+    total = 0
+    for ch in range(chunks):
+        total += used[ch]
+    pairs = np.empty((total, 4), np.int64)
+    near = np.empty(total, np.bool_)
+    at = 0
+    for ch in range(chunks):
+        if used[ch] <= room:
+            pairs[at:at + used[ch]] = out[ch * room:ch * room + used[ch]]
+            near[at:at + used[ch]] = out_near[ch * room:ch * room + used[ch]]
+        else:  # overflowed: written again, in full
+            pos = at
+            for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
+                pos += _ee_one(queries[k], True, pairs, near, pos, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items,
+                               origin, cell, dims, r)
+        at += used[ch]
+    return pairs, near
 
 
 @njit(cache=True, parallel=True)
@@ -303,5 +350,5 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dir
     e_lo = np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]]))
     e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
     grid = Grid(e_lo - radius, e_hi + radius, cell)
-    return _ee_pairs(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
-                     grid.origin, grid.cell, grid.dims, float(radius), *ring)
+    return _ee_pairs_guessed(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
+                             grid.origin, grid.cell, grid.dims, float(radius), *ring)
