@@ -319,6 +319,8 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
 
 @njit(cache=True, parallel=True)
 def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
+    """The edge pairs of every query, counted in one pass and written in a second: the reference
+    :func:`_ee_pairs_guessed` is checked against (tests/test_grid.py)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     counts = np.zeros(len(queries), np.int64)
     dummy = np.zeros((0, 4), np.int64)

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels import air_forces_into
-
 __all__ = ["gravity_forces", "gravity_energy", "air_forces"]
 
 
@@ -39,7 +37,7 @@ def air_damping(model, state, wind=None) -> np.ndarray:
     out = np.zeros((model.vertex_count, 3, 3))
     if model.air_density <= 0.0 or not model.face_count:
         return out
-    area, normal, vn = _face_air(model, state, _face_wind(model, state, wind))
+    area, normal, vn = _face_air(model, state, wind)
     c = model.air_density * model.drag_coefficient * area * np.abs(vn) / 3.0
     block = (c[:, None, None] * normal[:, :, None] * normal[:, None, :]).reshape(-1, 9)
     corners = model.faces.reshape(-1)
@@ -50,31 +48,20 @@ def air_damping(model, state, wind=None) -> np.ndarray:
 
 
 def _face_air(model, state, wind):
-    """(area [m²], unit normal, normal velocity relative to the air [m/s]) of every face; ``wind``
-    as :func:`_face_wind` gives it."""
+    """(area [m²], unit normal, normal velocity relative to the air [m/s]) of every face."""
     f = model.faces
     p0, p1, p2 = state.x[f[:, 0]], state.x[f[:, 1]], state.x[f[:, 2]]
     cross = np.cross(p1 - p0, p2 - p0)
     area2 = np.linalg.norm(cross, axis=1)
     normal = cross / np.maximum(area2, 1e-300)[:, None]
-    v_face = (state.v[f[:, 0]] + state.v[f[:, 1]] + state.v[f[:, 2]]) / 3.0 - wind
+    v_face = (state.v[f[:, 0]] + state.v[f[:, 1]] + state.v[f[:, 2]]) / 3.0
+    if wind is not None:
+        v_face = v_face - (wind((p0 + p1 + p2) / 3.0, state.t) if callable(wind) else np.asarray(wind, float))
     return 0.5 * area2, normal, np.einsum("ij,ij->i", v_face, normal)
 
 
-def _face_wind(model, state, wind):
-    """The air's velocity [m/s] as :func:`_face_air` and :func:`~tailor.forces.kernels.air_forces_into`
-    take it: (1, 3) for all faces, or (F, 3) per face (given so, or ``wind(points, t)`` at the face
-    centres); still air if None."""
-    if wind is None:
-        return np.zeros((1, 3))
-    if callable(wind):
-        return np.asarray(wind(state.x[model.faces].mean(axis=1), state.t), float).reshape(-1, 3)
-    return np.asarray(wind, float).reshape(-1, 3)
-
-
 def air_forces(model, state, wind=None, out=None) -> np.ndarray:
-    """Normal air force on every face, spread equally to its corners [N], shape (N, 3):
-    f = −½·ρ_air·C_d·A·(v_rel·n)|v_rel·n|·n, v_rel the face's mean velocity less the air's.
+    """Normal air force on every face, spread to its corners [N], shape (N, 3).
 
     Parameters
     ----------
@@ -83,6 +70,12 @@ def air_forces(model, state, wind=None, out=None) -> np.ndarray:
         returning (F, 3) at the face centres. ``None`` = still air.
     """
     out = np.zeros_like(state.x) if out is None else out
-    if model.air_density > 0.0 and model.face_count:
-        air_forces_into(model, state, _face_wind(model, state, wind), out)  # compiled: called every step
+    if model.air_density <= 0.0:
+        return out
+    area, normal, vn = _face_air(model, state, wind)
+    mag = -0.5 * model.air_density * model.drag_coefficient * area * vn * np.abs(vn) / 3.0
+    force = normal * mag[:, None]
+    n = len(out)
+    for k in range(3):
+        out[:, k] += np.bincount(model.faces.reshape(-1), np.repeat(force[:, k], 3), minlength=n)
     return out

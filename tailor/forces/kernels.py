@@ -24,7 +24,6 @@ __all__ = [
     "bending_system_into",
     "element_colors",
     "face_stretch_into",
-    "air_forces_into",
 ]
 
 
@@ -429,37 +428,3 @@ def face_stretch_into(x, faces, dm, out):
         half = 0.5 * (a + b)
         out[f] = math.sqrt(half + math.sqrt(max(half * half - (a * b - c * c), 0.0)))
 
-
-@njit(cache=True)
-def _air(x, v, faces, wind, rho, cd, force):
-    """Each face's normal air force, summed per corner in face order into ``force`` (zeroed: added
-    where it is wanted), in the numpy expression's own order of operations (serial: a few
-    operations a face, cheaper than any thread's start)."""
-    per_face = wind.shape[0] > 1
-    for f in range(faces.shape[0]):
-        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
-        d1x, d1y, d1z = x[i1, 0] - x[i0, 0], x[i1, 1] - x[i0, 1], x[i1, 2] - x[i0, 2]
-        d2x, d2y, d2z = x[i2, 0] - x[i0, 0], x[i2, 1] - x[i0, 1], x[i2, 2] - x[i0, 2]
-        cx, cy, cz = d1y * d2z - d1z * d2y, d1z * d2x - d1x * d2z, d1x * d2y - d1y * d2x
-        area2 = math.sqrt(cx * cx + cy * cy + cz * cz)
-        den = max(area2, 1e-300)
-        nx, ny, nz = cx / den, cy / den, cz / den
-        w = f if per_face else 0
-        vn = (((v[i0, 0] + v[i1, 0] + v[i2, 0]) / 3.0 - wind[w, 0]) * nx
-              + ((v[i0, 1] + v[i1, 1] + v[i2, 1]) / 3.0 - wind[w, 1]) * ny
-              + ((v[i0, 2] + v[i1, 2] + v[i2, 2]) / 3.0 - wind[w, 2]) * nz)
-        mag = -0.5 * rho * cd * (0.5 * area2) * vn * abs(vn) / 3.0
-        for i in (i0, i1, i2):
-            force[i, 0] += nx * mag
-            force[i, 1] += ny * mag
-            force[i, 2] += nz * mag
-
-
-def air_forces_into(model, state, wind, out) -> None:
-    """Add the air's normal force on every face, spread to its corners, into ``out`` (N, 3) [N], as
-    :func:`tailor.forces.external.air_forces` describes. ``wind``: the air's velocity, (1, 3) or
-    per face (F, 3) [m/s]."""
-    f = np.zeros((model.vertex_count, 3))
-    _air(state.x, state.v, model.faces, np.ascontiguousarray(wind, dtype=np.float64), float(model.air_density),
-         float(model.drag_coefficient), f)
-    out += f
