@@ -126,17 +126,13 @@ class BodyCollider:
         learns serve the whole span) and the frame's own triangles, which the query tests exactly
         (the last two of each kept: a walk moves on frame by frame)."""
         span = frame // BODY_SPAN
-        if span not in self._boxes:
-            if len(self._boxes) >= 2:
-                self._boxes.pop(next(iter(self._boxes)))
-            f = self.frames[span * BODY_SPAN:(span + 1) * BODY_SPAN]
-            boxes = TriangleBoxes(f[0], self.faces, BOX_CELL, vertex_boxes=(f.min(axis=0), f.max(axis=0)))
-            self._boxes[span] = NearCubes(boxes, self.margin)
-        if frame not in self._geometry:
-            if len(self._geometry) >= 2:
-                self._geometry.pop(next(iter(self._geometry)))
-            self._geometry[frame] = TriangleGeometry(self.frames[frame], self.faces)
-        return self._boxes[span], self._geometry[frame]
+        return (_recent(self._boxes, span, 2, lambda: self._span_boxes(span)),
+                _recent(self._geometry, frame, 2, lambda: TriangleGeometry(self.frames[frame], self.faces)))
+
+    def _span_boxes(self, span: int) -> NearCubes:
+        """The margin's FCL broad phase of the body over frames ``span · BODY_SPAN`` onwards."""
+        f = self.frames[span * BODY_SPAN:(span + 1) * BODY_SPAN]
+        return NearCubes(TriangleBoxes(f[0], self.faces, BOX_CELL, vertex_boxes=(f.min(axis=0), f.max(axis=0))), self.margin)
 
     def candidates(self, x, frame: int, *, cache: bool = True):
         """(lo, hi, tri): the body triangles within ``margin`` of vertex i are ``tri[lo[i]:hi[i]]`` (FCL broad phase).
@@ -170,12 +166,7 @@ class BodyCollider:
 
     def _drift(self, a: int, b: int):
         """The body's :class:`BodyDrift` from frame ``a`` to ``b`` within the margin (the last few kept)."""
-        key = (a, b)
-        if key not in self._drifts:
-            if len(self._drifts) >= 4:
-                self._drifts.pop(next(iter(self._drifts)))
-            self._drifts[key] = BodyDrift(self.frames[a], self.frames[b], self.faces, self.margin)
-        return self._drifts[key]
+        return _recent(self._drifts, (a, b), 4, lambda: BodyDrift(self.frames[a], self.frames[b], self.faces, self.margin))
 
     def _inside(self, points, body_x) -> np.ndarray:
         """Whether each point lies inside the closed body at ``body_x`` (:class:`InsideTest`, binned once
@@ -405,6 +396,16 @@ class BodyCollider:
         mu = np.broadcast_to(mu, hit.shape)
         return Contacts(hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]), model.vertex_count,
                         stick=np.ones(int(rest.sum()), bool), body_velocity=vb[rest], friction=mu[rest])
+
+
+def _recent(store: dict, key, keep: int, make):
+    """``store[key]``, made by ``make()`` if missing; the store keeps the ``keep`` made last (a walk
+    moves on frame by frame: what it left behind is not asked again)."""
+    if key not in store:
+        if len(store) >= keep:
+            store.pop(next(iter(store)))
+        store[key] = make()
+    return store[key]
 
 
 def _at(thickness, ids):

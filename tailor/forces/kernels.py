@@ -427,4 +427,3 @@ def face_stretch_into(x, faces, dm, out):
             c += c1 * c2
         half = 0.5 * (a + b)
         out[f] = math.sqrt(half + math.sqrt(max(half * half - (a * b - c * c), 0.0)))
-
