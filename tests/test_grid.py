@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from tailor.collide.closest import closest_barycentric
 from tailor.collide.grid import MAX_CELLS, Grid, bin_boxes, edge_edge_pairs, vertex_triangle_pairs
@@ -144,3 +145,30 @@ def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_
     first = np.isin(want[:, 0] // 2, np.arange(_GUESS_CHUNK)).sum()
     assert first > _GUESS_CHUNK * _GUESS_PAIRS and len(want) - first > 100  # one chunk overflowed, the others did not
     assert np.array_equal(got, want) and np.array_equal(got_near, want_near)
+
+
+def test_vertex_triangle_pairs_overflowing_their_room_are_searched_again_in_vertex_order():
+    """Vertices are searched in chunks, each writing into room for a few triangles a vertex; a chunk in
+    a crumple overflows and is searched again in full. Every pair a brute-force check finds, once,
+    grouped by vertex in the order the vertices were given."""
+    from tailor.collide.grid import _GUESS_CHUNK, _GUESS_TRIANGLES
+
+    rng = np.random.default_rng(7)
+    n = 3 * _GUESS_CHUNK
+    x = rng.uniform(0.0, 0.2, (n, 3))
+    x[:_GUESS_CHUNK] = rng.uniform(0.0, 0.04, (_GUESS_CHUNK, 3))  # the first chunk crumpled together
+    faces = cKDTree(x).query(x, k=3)[1]  # each vertex with its two nearest: small triangles
+    verts = np.r_[rng.permutation(_GUESS_CHUNK), _GUESS_CHUNK + rng.permutation(n - _GUESS_CHUNK)]  # the crumple first
+    tris, radius = np.arange(len(faces)), 0.02
+    ring = (np.zeros(n + 1, np.int64), np.zeros(0, np.int64))
+    v, t, _ = vertex_triangle_pairs(verts, tris, faces, x, x, x, radius, 0.02, ring, exact=False)
+    t_lo, t_hi = x[faces].min(axis=1), x[faces].max(axis=1)
+    gap = np.linalg.norm(np.maximum(0.0, np.maximum(t_lo[None] - x[verts, None], x[verts, None] - t_hi[None])), axis=2)
+    want = (gap <= radius) & ~(faces[None] == verts[:, None, None]).any(axis=2)
+    per_chunk = want.sum(axis=1).reshape(3, -1).sum(axis=1)
+    assert per_chunk[0] > _GUESS_CHUNK * _GUESS_TRIANGLES and 100 < per_chunk[1:].max() < _GUESS_CHUNK * _GUESS_TRIANGLES
+    rank = np.empty(n, np.int64)
+    rank[verts] = np.arange(n)
+    assert np.all(np.diff(rank[v]) >= 0)  # grouped by vertex, in the given order
+    got = set(zip(v.tolist(), t.tolist()))
+    assert len(got) == len(v) and got == {(verts[i], k) for i, k in zip(*np.nonzero(want))}

@@ -156,10 +156,40 @@ def _shares(p, face):
     return face[0] == p or face[1] == p or face[2] == p
 
 
+_GUESS_CHUNK = 256
+"""Queries (vertices, edges) a chunk of the one-pass searches takes in turn (:func:`_vt_pairs`, :func:`_ee_pairs_guessed`)."""
+
+_GUESS_PAIRS = 16
+"""Pairs per query a chunk of :func:`_ee_pairs_guessed` has room for (a cloth edge meets about 8)."""
+
+_GUESS_TRIANGLES = 16
+"""Triangles per vertex a chunk of :func:`_vt_pairs` has room for."""
+
+
 @njit(cache=True)
-def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell, dims,
-            r, exact):
-    """Count (``fill`` False) or write the triangles within ``r`` of active vertex ``q``."""
+def _joined(out, out_near, used, room):
+    """The pairs of each chunk (``used[k]`` rows of ``out`` from row ``k · room``) joined in order:
+    (pairs, near, each chunk's first row). A chunk that overflowed its room is left unwritten there,
+    for the caller to search again into its rows."""
+    starts = np.zeros(len(used), np.int64)
+    total = 0
+    for ch in range(len(used)):
+        starts[ch] = total
+        total += used[ch]
+    pairs = np.empty((total, out.shape[1]), np.int64)
+    near = np.empty(total, np.bool_)
+    for ch in range(len(used)):
+        if used[ch] <= room:
+            pairs[starts[ch]:starts[ch] + used[ch]] = out[ch * room:ch * room + used[ch]]
+            near[starts[ch]:starts[ch] + used[ch]] = out_near[ch * room:ch * room + used[ch]]
+    return pairs, near, starts
+
+
+@njit(cache=True)
+def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell, dims,
+            r, exact, limit=-1):
+    """Write (rows (vertex, triangle) of ``out`` from ``start``) and count the triangles within ``r``
+    of active vertex ``q``; with ``limit`` ≥ 0 none is written at or beyond it (they are still counted)."""
     p = verts[q]
     found = 0
     r2 = r * r
@@ -183,9 +213,9 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
                             d2 += g * g
                         if d2 > r2:
                             continue
-                    if fill:
-                        out_v[start + found] = p
-                        out_t[start + found] = tris[t]
+                    if limit < 0 or start + found < limit:
+                        out[start + found, 0] = p
+                        out[start + found, 1] = tris[t]
                         out_near[start + found] = (_neighbours(ring_ptr, ring_idx, p, f[0])
                                                    or _neighbours(ring_ptr, ring_idx, p, f[1])
                                                    or _neighbours(ring_ptr, ring_idx, p, f[2]))
@@ -195,22 +225,28 @@ def _vt_one(q, fill, out_v, out_t, out_near, start, ring_ptr, ring_idx, verts, v
 
 @njit(cache=True, parallel=True)
 def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx):
+    """The triangles of every active vertex in one pass where they fit (as :func:`_ee_pairs_guessed`)."""
     ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
-    counts = np.zeros(len(verts), np.int64)
-    dummy = np.zeros(0, np.int64)
-    no = np.zeros(0, np.bool_)
-    for q in prange(len(verts)):
-        counts[q] = _vt_one(q, False, dummy, dummy, no, 0, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin,
-                            cell, dims, r, exact)
-    starts = np.zeros(len(verts) + 1, np.int64)
-    starts[1:] = np.cumsum(counts)
-    out_v = np.empty(starts[-1], np.int64)
-    out_t = np.empty(starts[-1], np.int64)
-    out_near = np.empty(starts[-1], np.bool_)
-    for q in prange(len(verts)):
-        _vt_one(q, True, out_v, out_t, out_near, starts[q], ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell,
-                dims, r, exact)
-    return out_v, out_t, out_near
+    n = len(verts)
+    chunks = (n + _GUESS_CHUNK - 1) // _GUESS_CHUNK
+    room = _GUESS_CHUNK * _GUESS_TRIANGLES
+    out = np.empty((chunks * room, 2), np.int64)
+    out_near = np.empty(chunks * room, np.bool_)
+    used = np.zeros(chunks, np.int64)
+    for ch in prange(chunks):
+        written = 0
+        for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
+            written += _vt_one(q, out, out_near, ch * room + written, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris,
+                               faces, x, ptr, items, origin, cell, dims, r, exact, (ch + 1) * room)
+        used[ch] = written
+    pairs, near, starts = _joined(out, out_near, used, room)
+    for ch in range(chunks):
+        if used[ch] > room:  # overflowed: written again, in full
+            pos = starts[ch]
+            for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
+                pos += _vt_one(q, pairs, near, pos, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items,
+                               origin, cell, dims, r, exact)
+    return pairs, near
 
 
 def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool):
@@ -230,8 +266,9 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     t_lo, t_hi = np.ascontiguousarray(corners_lo.min(axis=1)), np.ascontiguousarray(corners_hi.max(axis=1))
     v_lo, v_hi = np.ascontiguousarray(lo[verts]), np.ascontiguousarray(hi[verts])
     grid = Grid(np.vstack([t_lo, v_lo - radius]), np.vstack([t_hi, v_hi + radius]), cell)
-    return _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
-                     grid.cell, grid.dims, float(radius), bool(exact), *ring)
+    pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
+                            grid.cell, grid.dims, float(radius), bool(exact), *ring)
+    return np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1]), near
 
 
 @njit(cache=True)
@@ -272,13 +309,6 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
     return found
 
 
-_GUESS_CHUNK = 256
-"""Queries a chunk of :func:`_ee_pairs_guessed` takes in turn."""
-
-_GUESS_PAIRS = 16
-"""Pairs per query a chunk of :func:`_ee_pairs_guessed` has room for (a cloth edge meets about 8)."""
-
-
 @njit(cache=True, parallel=True)
 def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
     """:func:`_ee_pairs` in one pass where it can: each chunk of :data:`_GUESS_CHUNK` queries writes
@@ -298,22 +328,13 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
             written += _ee_one(queries[k], True, out, out_near, first + written, ring_ptr, ring_idx, ids, edges, e_lo, e_hi,
                                dirty, ptr, items, origin, cell, dims, r, end)
         used[ch] = written
-    total = 0
+    pairs, near, starts = _joined(out, out_near, used, room)
     for ch in range(chunks):
-        total += used[ch]
-    pairs = np.empty((total, 4), np.int64)
-    near = np.empty(total, np.bool_)
-    at = 0
-    for ch in range(chunks):
-        if used[ch] <= room:
-            pairs[at:at + used[ch]] = out[ch * room:ch * room + used[ch]]
-            near[at:at + used[ch]] = out_near[ch * room:ch * room + used[ch]]
-        else:  # overflowed: written again, in full
-            pos = at
+        if used[ch] > room:  # overflowed: written again, in full
+            pos = starts[ch]
             for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
                 pos += _ee_one(queries[k], True, pairs, near, pos, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items,
                                origin, cell, dims, r)
-        at += used[ch]
     return pairs, near
 
 
