@@ -237,11 +237,18 @@ class SelfCollider:
         self.stats["query_s"] += time.perf_counter() - t0
 
     def _in_touching_patches(self, vertex, tri, ee):
-        """(vertex–triangle, edge–edge) candidates kept: those of patch pairs that can touch."""
+        """(vertex–triangle, edge–edge) candidates kept: those of patch pairs that can touch, and
+        those :meth:`ignore` keeps across an open seam (the seam's two sides, closing edge to edge,
+        lie flat together: their patches would not be a pair that can touch)."""
         if self._pairs is None:
             return np.ones(len(vertex), bool), np.ones(len(ee), bool)
-        return (self.regions.allowed_vertex_triangle(self._pairs, vertex, tri),
-                self.regions.allowed_edge_edge(self._pairs, ee))
+        keep_vt = self.regions.allowed_vertex_triangle(self._pairs, vertex, tri)
+        keep_ee = self.regions.allowed_edge_edge(self._pairs, ee)
+        if self._kept is not None:
+            keep_vt |= self._is_kept(vertex[:, None], self.faces[tri]).any(axis=1)
+            if len(ee):
+                keep_ee |= self._is_kept(ee[:, :2, None], ee[:, None, 2:]).reshape(len(ee), 4).any(axis=1)
+        return keep_vt, keep_ee
 
     def _find(self, x, lo, hi, faces, dirty, *, exact):
         """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the

@@ -167,6 +167,15 @@ _GUESS_TRIANGLES = 16
 
 
 @njit(cache=True)
+def _chunk_room(n, per, width):
+    """The chunks of ``n`` queries (:data:`_GUESS_CHUNK` each), a chunk's room (``per`` pairs a query),
+    rows for every chunk's room (``width`` ints each, and a bool), and each chunk's count of pairs."""
+    chunks = (n + _GUESS_CHUNK - 1) // _GUESS_CHUNK
+    room = _GUESS_CHUNK * per
+    return chunks, room, np.empty((chunks * room, width), np.int64), np.empty(chunks * room, np.bool_), np.zeros(chunks, np.int64)
+
+
+@njit(cache=True)
 def _joined(out, out_near, used, room):
     """The pairs of each chunk (``used[k]`` rows of ``out`` from row ``k · room``) joined in order:
     (pairs, near, each chunk's first row). A chunk that overflowed its room is left unwritten there,
@@ -228,11 +237,7 @@ def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims,
     """The triangles of every active vertex in one pass where they fit (as :func:`_ee_pairs_guessed`)."""
     ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
     n = len(verts)
-    chunks = (n + _GUESS_CHUNK - 1) // _GUESS_CHUNK
-    room = _GUESS_CHUNK * _GUESS_TRIANGLES
-    out = np.empty((chunks * room, 2), np.int64)
-    out_near = np.empty(chunks * room, np.bool_)
-    used = np.zeros(chunks, np.int64)
+    chunks, room, out, out_near, used = _chunk_room(n, _GUESS_TRIANGLES, 2)
     for ch in prange(chunks):
         written = 0
         for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
@@ -316,11 +321,7 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
     written again; the chunks' pairs are then joined in order (the same pairs, in the same order)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     nq = len(queries)
-    chunks = (nq + _GUESS_CHUNK - 1) // _GUESS_CHUNK
-    room = _GUESS_CHUNK * _GUESS_PAIRS
-    out = np.empty((chunks * room, 4), np.int64)
-    out_near = np.empty(chunks * room, np.bool_)
-    used = np.zeros(chunks, np.int64)
+    chunks, room, out, out_near, used = _chunk_room(nq, _GUESS_PAIRS, 4)
     for ch in prange(chunks):
         first, end = ch * room, (ch + 1) * room
         written = 0
