@@ -416,8 +416,8 @@ def body_gap(x, body_x, body_faces):
     The body vertex nearest a point is on the surface, so the surface is no farther than it; every
     triangle that could hold a nearer point has its centroid within that bound plus the largest
     centroid-to-corner distance. Those are each point's candidates (a k-d tree of centroids): a
-    measurement asked once per frame, for which FCL's broad phase, a Python object per pair, costs
-    three times as much."""
+    measurement asked once per frame, for which FCL's broad phase, a Python object per pair, is the
+    slower way (docs/measurements.md, seventeenth day)."""
     from scipy.spatial import cKDTree
 
     x = np.ascontiguousarray(x, float)
