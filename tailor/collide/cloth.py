@@ -244,10 +244,11 @@ class SelfCollider:
             return np.ones(len(vertex), bool), np.ones(len(ee), bool)
         keep_vt = self.regions.allowed_vertex_triangle(self._pairs, vertex, tri)
         keep_ee = self.regions.allowed_edge_edge(self._pairs, ee)
-        if self._kept is not None:
-            keep_vt |= self._is_kept(vertex[:, None], self.faces[tri]).any(axis=1)
-            if len(ee):
-                keep_ee |= self._is_kept(ee[:, :2, None], ee[:, None, 2:]).reshape(len(ee), 4).any(axis=1)
+        if self._kept is not None:  # only the candidates the patches turned away can be saved
+            out = np.flatnonzero(~keep_vt)
+            keep_vt[out] = self._is_kept(vertex[out, None], self.faces[tri[out]]).any(axis=1)
+            out = np.flatnonzero(~keep_ee)
+            keep_ee[out] = self._is_kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1)
         return keep_vt, keep_ee
 
     def _find(self, x, lo, hi, faces, dirty, *, exact):

@@ -317,8 +317,8 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 @njit(cache=True, parallel=True)
 def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
     """:func:`_ee_pairs` in one pass where it can: each chunk of :data:`_GUESS_CHUNK` queries writes
-    into room for :data:`_GUESS_PAIRS` pairs a query, and only a chunk that overflows is counted and
-    written again; the chunks' pairs are then joined in order (the same pairs, in the same order)."""
+    into room for :data:`_GUESS_PAIRS` pairs a query; the chunks' pairs are joined in order and only a
+    chunk that overflowed is searched again, straight into its place (the same pairs, in the same order)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     nq = len(queries)
     chunks, room, out, out_near, used = _chunk_room(nq, _GUESS_PAIRS, 4)
