@@ -295,10 +295,11 @@ def test_an_outer_garment_held_where_an_inner_one_is_held_is_raised_and_held_a_l
 
 _ARMPIT = pytest.mark.xfail(
     strict=True, raises=SimulationUnstable,
-    reason="2 cm: the T-shirt sewing over the dress stops at the right armpit (t = 1.84 s): every step the body's "
-           "response, pushing the T-shirt two thicknesses out of arm and torso at once, stretches a triangle 3.1 -> 4.4x, "
-           "until the self-contact response takes it to 10.5x (docs/measurements.md, seventeenth day). It passed "
-           "before the pairs kept across open seams escaped the patch filter, on round-off alone")
+    reason="2 cm: the dress's own sewing leaves its right armhole caught round the arm (a 2 cm triangle drawn "
+           "under the arm, its corners either side, 4.4x its size: sewing holds no body contact, so each step the solve "
+           "pulls it straight through the arm and the response pushes each corner out on its own side); alone, the "
+           "dress's first settling step slides it out (1.3x), but here the T-shirt sews over it still caught and the "
+           "self-contact response takes it to 10.5x at t = 1.84 s (docs/outfits.md)")
 
 
 @pytest.mark.parametrize("resolution,frames", [(0.04, 1), pytest.param(0.02, 5, marks=[pytest.mark.slow, _ARMPIT])])
