@@ -41,45 +41,69 @@ class SparsePattern:
 
     def __init__(self, model):
         nv = model.vertex_count
-        n = 3 * nv
         groups = [np.asarray(model.faces if model.elastic != "springs" else model.spring_vertices, np.int64)]
         if model.has_bending:
             groups.append(np.asarray(model.hinge_vertices, np.int64))
         self.has_pairs = len(model.pair_vertices) > 0
         if self.has_pairs:
             groups.append(np.asarray(model.pair_vertices, np.int64))
-        keys = [(g[:, :, None] * nv + g[:, None, :]).reshape(-1) for g in groups]
-        keys.append(np.arange(nv, dtype=np.int64) * (nv + 1))  # every vertex's own block
-        uniq, inverse = np.unique(np.concatenate(keys), return_inverse=True)
-        bi, bj = uniq // nv, uniq % nv
-        deg = np.bincount(bi, minlength=nv)
-        bstart = np.concatenate([[0], np.cumsum(deg)])
-        base = 9 * bstart[bi] + 3 * (np.arange(len(uniq)) - bstart[bi])  # slot of entry (a=0, b=0) of each block
-        stride = 3 * deg[bi]  # from one row of a block to the next
-        a3 = np.arange(3)
-        slots = base[:, None, None] + a3[None, :, None] * stride[:, None, None] + a3[None, None, :]  # (B, 3, 3)
-        self.shape = (n, n)
+        keys = np.concatenate([(g[:, :, None] * nv + g[:, None, :]).reshape(-1) for g in groups]
+                              + [np.arange(nv, dtype=np.int64) * (nv + 1)])  # every vertex's own block last
+        uniq, inverse = np.unique(keys, return_inverse=True)
+        del keys
+        self.shape = (3 * nv, 3 * nv)
         self.nnz = 9 * len(uniq)
-        self.cols = np.empty(self.nnz, np.int32)
-        self.cols[slots] = (3 * bj[:, None, None] + a3[None, None, :]).astype(np.int32)
-        self.indptr = (9 * np.repeat(bstart[:-1], 3) + np.tile(a3, nv) * np.repeat(3 * deg, 3)).astype(np.int32)
-        self.indptr = np.append(self.indptr, self.nnz).astype(np.int32)
-        self.block_indptr, self.block_cols = bstart.astype(np.int32), bj.astype(np.int32)
-        self._block_slots = slots.reshape(-1)
-        self._diag_block = inverse[-nv:]  # the identity keys came last
-        self.diagonal_slots = slots[self._diag_block][:, a3, a3].reshape(-1)
-        """CSR slot of each diagonal entry (dof order)."""
+        self.block_rows = uniq // nv
+        """Row (vertex) of every 3×3 block, in :meth:`blocks` order."""
+        self.block_cols = (uniq % nv).astype(np.int32)
+        del uniq
+        self.block_indptr = np.concatenate([[0], np.cumsum(np.bincount(self.block_rows, minlength=nv))]).astype(np.int32)
+        self._diag_block = inverse[-nv:].copy()  # the identity keys came last
         self.element_blocks, start = [], 0
         for g in groups:  # block of every vertex pair of every element
             e, k = g.shape
-            self.element_blocks.append(np.ascontiguousarray(inverse[start : start + e * k * k].reshape(e, k, k), dtype=np.int64))
+            self.element_blocks.append(inverse[start : start + e * k * k].reshape(e, k, k))
             start += e * k * k
         """Per element group (faces or springs, then hinges, then pairs): block index of each of its
         vertex pairs, (E, k, k)."""
-        self.block_rows = bi.astype(np.int64)
-        """Row (vertex) of every 3×3 block, in :meth:`blocks` order."""
         self._groups = groups
         self._colors = [None] * len(groups)
+
+    @cached_property
+    def _block_slots(self) -> np.ndarray:
+        """Scalar CSR slot of every entry of every block, (B·9,) in block order (row a, column b):
+        row 3i+a holds, for each neighbour j of vertex i in increasing order, the entries (3i+a, 3j+b).
+        Made on first use, as the rest of the scalar layout: the implicit step works on blocks."""
+        start = self.block_indptr.astype(np.int64)
+        deg = np.diff(start)
+        rows = self.block_rows
+        base = 9 * start[rows] + 3 * (np.arange(len(rows)) - start[rows])  # slot of entry (a=0, b=0) of each block
+        stride = 3 * deg[rows]  # from one row of a block to the next
+        a3 = np.arange(3)
+        return (base[:, None, None] + a3[None, :, None] * stride[:, None, None] + a3[None, None, :]).reshape(-1)
+
+    @cached_property
+    def cols(self) -> np.ndarray:
+        """Scalar CSR column of every stored entry."""
+        cols = np.empty(self.nnz, np.int32)
+        a3 = np.arange(3)
+        cols[self._block_slots] = (3 * self.block_cols[:, None, None] + a3[None, None, :]).astype(np.int32).repeat(3, axis=1).reshape(-1)
+        return cols
+
+    @cached_property
+    def indptr(self) -> np.ndarray:
+        """Scalar CSR row pointers (three rows per vertex, each as long as its block row)."""
+        start = self.block_indptr[:-1].astype(np.int64)
+        deg = np.diff(self.block_indptr.astype(np.int64))
+        a3 = np.arange(3)
+        rows = 9 * np.repeat(start, 3) + np.tile(a3, len(start)) * np.repeat(3 * deg, 3)
+        return np.append(rows, self.nnz).astype(np.int32)
+
+    @cached_property
+    def diagonal_slots(self) -> np.ndarray:
+        """CSR slot of each diagonal entry (dof order)."""
+        a3 = np.arange(3)
+        return self._block_slots.reshape(-1, 3, 3)[self._diag_block][:, a3, a3].reshape(-1)
 
     @cached_property
     def positions(self) -> list:
