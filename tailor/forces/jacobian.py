@@ -30,6 +30,18 @@ from .membrane import membrane_gradients
 __all__ = ["SparsePattern", "force_jacobians", "jacobian_data", "jacobian_blocks", "implicit_blocks"]
 
 
+def _block_keys(groups, nv: int) -> np.ndarray:
+    """Sorted keys i·nv + j of the 3×3 blocks of :class:`SparsePattern`: every vertex's own, and
+    every two vertices of an element both ways. Found from each element's unordered pairs (3 a
+    triangle, 6 a hinge) rather than its k² ordered ones, a third of the keys to sort."""
+    parts = [np.arange(nv, dtype=np.int64) * (nv + 1)]
+    for g in groups:
+        a, b = np.triu_indices(g.shape[1], 1)
+        pair = np.unique((np.minimum(g[:, a], g[:, b]) * nv + np.maximum(g[:, a], g[:, b])).reshape(-1))
+        parts += [pair, (pair % nv) * nv + pair // nv]
+    return np.unique(np.concatenate(parts))
+
+
 class SparsePattern:
     """The CSR sparsity of a model's Jacobians and the scatter map of every element entry.
 
@@ -47,23 +59,16 @@ class SparsePattern:
         self.has_pairs = len(model.pair_vertices) > 0
         if self.has_pairs:
             groups.append(np.asarray(model.pair_vertices, np.int64))
-        keys = np.concatenate([(g[:, :, None] * nv + g[:, None, :]).reshape(-1) for g in groups]
-                              + [np.arange(nv, dtype=np.int64) * (nv + 1)])  # every vertex's own block last
-        uniq, inverse = np.unique(keys, return_inverse=True)
-        del keys
+        keys = _block_keys(groups, nv)
         self.shape = (3 * nv, 3 * nv)
-        self.nnz = 9 * len(uniq)
-        self.block_rows = uniq // nv
+        self.nnz = 9 * len(keys)
+        self.block_rows = keys // nv
         """Row (vertex) of every 3×3 block, in :meth:`blocks` order."""
-        self.block_cols = (uniq % nv).astype(np.int32)
-        del uniq
+        self.block_cols = (keys % nv).astype(np.int32)
         self.block_indptr = np.concatenate([[0], np.cumsum(np.bincount(self.block_rows, minlength=nv))]).astype(np.int32)
-        self._diag_block = inverse[-nv:].copy()  # the identity keys came last
-        self.element_blocks, start = [], 0
-        for g in groups:  # block of every vertex pair of every element
-            e, k = g.shape
-            self.element_blocks.append(inverse[start : start + e * k * k].reshape(e, k, k))
-            start += e * k * k
+        self._diag_block = np.searchsorted(keys, np.arange(nv, dtype=np.int64) * (nv + 1))
+        self.element_blocks = [np.searchsorted(keys, (g[:, :, None] * nv + g[:, None, :]).reshape(-1)).reshape(g.shape[0], g.shape[1], g.shape[1])
+                               for g in groups]  # block of every vertex pair of every element
         """Per element group (faces or springs, then hinges, then pairs): block index of each of its
         vertex pairs, (E, k, k)."""
         self._groups = groups
