@@ -173,6 +173,7 @@ class SelfCollider:
         self._x_prev = None
         self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
         self._kept = None  # sorted vertex-pair keys that keep contact though ignored
+        self._keeping = None  # (N,) bool: the vertices of those pairs
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1, "partial_queries": 0,
                       "query_s": 0.0, "response_s": 0.0}
 
@@ -244,10 +245,13 @@ class SelfCollider:
             return np.ones(len(vertex), bool), np.ones(len(ee), bool)
         keep_vt = self.regions.allowed_vertex_triangle(self._pairs, vertex, tri)
         keep_ee = self.regions.allowed_edge_edge(self._pairs, ee)
-        if self._kept is not None:  # only the candidates the patches turned away can be saved
+        if self._kept is not None:  # only those the patches turned away, with a kept pair's vertex at each end, can be saved
+            free = self._keeping
             out = np.flatnonzero(~keep_vt)
+            out = out[free[vertex[out]] & free[self.faces[tri[out]]].any(axis=1)]
             keep_vt[out] = self._is_kept(vertex[out, None], self.faces[tri[out]]).any(axis=1)
             out = np.flatnonzero(~keep_ee)
+            out = out[free[ee[out, :2]].any(axis=1) & free[ee[out, 2:]].any(axis=1)]
             keep_ee[out] = self._is_kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1)
         return keep_vt, keep_ee
 
@@ -318,6 +322,10 @@ class SelfCollider:
             keys = unique_ints(np.r_[p[:, 0] * self.n + p[:, 1], p[:, 1] * self.n + p[:, 0]])
         if not (_same_mask(mask, self._ignored) and _same_mask(keys, self._kept)):
             self._ignored, self._kept = mask, keys
+            self._keeping = None
+            if keys is not None:
+                self._keeping = np.zeros(self.n, bool)
+                self._keeping[keys // self.n] = True
             self._anchor = None  # query again
 
     def _is_kept(self, a, b):
