@@ -67,10 +67,11 @@ class SparsePattern:
         self.block_cols = (keys % nv).astype(np.int32)
         self.block_indptr = np.concatenate([[0], np.cumsum(np.bincount(self.block_rows, minlength=nv))]).astype(np.int32)
         self._diag_block = np.searchsorted(keys, np.arange(nv, dtype=np.int64) * (nv + 1))
-        self.element_blocks = [np.searchsorted(keys, (g[:, :, None] * nv + g[:, None, :]).reshape(-1)).reshape(g.shape[0], g.shape[1], g.shape[1])
+        index = np.int32 if len(keys) < 2**31 else np.int64
+        self.element_blocks = [np.searchsorted(keys, (g[:, :, None] * nv + g[:, None, :]).reshape(-1)).astype(index).reshape(g.shape[0], g.shape[1], g.shape[1])
                                for g in groups]  # block of every vertex pair of every element
         """Per element group (faces or springs, then hinges, then pairs): block index of each of its
-        vertex pairs, (E, k, k)."""
+        vertex pairs, (E, k, k) (32-bit where they fit: the largest array of the pattern)."""
         self._groups = groups
         self._colors = [None] * len(groups)
 
