@@ -159,10 +159,11 @@ def _shares(p, face):
 _GUESS_CHUNK = 256
 """Queries (vertices, edges) a chunk of the one-pass searches takes in turn (:func:`_vt_pairs`, :func:`_ee_pairs_guessed`)."""
 
-_GUESS_PAIRS = 16
-"""Pairs per query a chunk of :func:`_ee_pairs_guessed` has room for (a cloth edge meets about 8)."""
+_GUESS_PAIRS = 32
+"""Pairs per query a chunk of :func:`_ee_pairs_guessed` has room for: a cloth edge meets about 8 in one
+garment, 13-14 where an outfit's layers overlap (a chunk over its room is searched twice)."""
 
-_GUESS_TRIANGLES = 16
+_GUESS_TRIANGLES = 32
 """Triangles per vertex a chunk of :func:`_vt_pairs` has room for."""
 
 
