@@ -20,6 +20,7 @@ import numpy as np
 
 from .collide import SELF_COLLISION_MODES, SELF_MARGIN, BodyCollider, Contacts, Layers, SelfCollider, untangle
 from .collide.cloth import PARTIAL_SHARE
+from .collide.grid import unique_edges
 from .collide.untangle import vertex_rings
 from .errors import SimulationError
 
@@ -264,7 +265,7 @@ class ContactPipeline:
         self._version = 0  # topology changes (cuts, tears) so far
         self._self: SelfCollider | None = None
         self._self_key = None
-        self._rings = None  # (numbering, each vertex's neighbours) for untangling
+        self._rings = None  # (numbering, each vertex's neighbours, the unique edges) for untangling
         self._start = None  # (N, 3) where the next step starts after a renumbering (follow), for the self-collider
         self._layer_thickness = None  # (numbering, (N,) body thickness per vertex) of an outfit
         self._untucked = None  # (N,) int: a tucked top's cloth outside its tuck, the garment it keeps its side against
@@ -375,10 +376,15 @@ class ContactPipeline:
 
     def _neighbours(self, model):
         """Each vertex's neighbours across an edge (CSR), for ``model``'s numbering (kept for untangling too)."""
+        return self._topology(model)[0]
+
+    def _topology(self, model):
+        """(each vertex's neighbours across an edge (CSR), the unique edges) of ``model``'s numbering, kept
+        while it stands: untangling checks the crossings every frame."""
         key = (model.vertex_count, self._version)
         if self._rings is None or self._rings[0] != key:
-            self._rings = (key, vertex_rings(model.faces, model.vertex_count))
-        return self._rings[1]
+            self._rings = (key, vertex_rings(model.faces, model.vertex_count), unique_edges(model.faces, model.vertex_count))
+        return self._rings[1:]
 
     def self_collider(self, model, x, body_x=None) -> SelfCollider:
         """The self-collider of ``model``'s numbering, built from positions ``x`` (and, for an
@@ -434,9 +440,9 @@ class ContactPipeline:
         if self.self_mode == "off":
             return 0, 0
         key = (model.vertex_count, self._version)
-        rings = self._neighbours(model)
+        rings, edges = self._topology(model)
         inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
-        found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=rings)
+        found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=rings, edges=edges)
         if found:
             if self._self is not None and self._self_key[:2] == key:
                 self._self.moved(state.x)

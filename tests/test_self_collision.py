@@ -160,6 +160,7 @@ def test_self_intersections_finds_crossings_and_ignores_neighbours():
 
 def test_edge_crossings_find_every_intersecting_triangle_pair_and_ignore_neighbours():
     from tailor.collide import edge_crossings
+    from tailor.collide.grid import unique_edges
 
     tri = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     assert len(edge_crossings(np.r_[tri, [[1.0, 1.0, 0.0]]], [[0, 1, 2], [1, 3, 2]])) == 0  # neighbours
@@ -173,6 +174,9 @@ def test_edge_crossings_find_every_intersecting_triangle_pair_and_ignore_neighbo
         v = rng.uniform(0, 1, (6, 3))
         pairs = len(self_intersections(v, [[0, 1, 2], [3, 4, 5]]))
         assert (len(edge_crossings(v, [[0, 1, 2], [3, 4, 5]])) > 0) == (pairs > 0)
+    soup = np.r_[tri, pierce, [[50.0, 50.0, 50.0]]]  # a vertex in no face: not in the grid
+    kept = unique_edges(np.array([[0, 1, 2], [3, 4, 5]]), 7)  # a caller's kept edges: the same answer
+    assert np.array_equal(edge_crossings(soup, [[0, 1, 2], [3, 4, 5]], kept), found)
 
 
 def test_ignored_vertices_take_no_part_in_any_contact():

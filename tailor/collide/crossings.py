@@ -102,18 +102,22 @@ def _edge_crossings(x, faces, edges, origin, cell, dims):
     return res
 
 
-def edge_crossings(vertices, faces) -> np.ndarray:
+def edge_crossings(vertices, faces, edges=None) -> np.ndarray:
     """(K, 3): the edges (two vertex indices) of a mesh that pass through one of its own triangles
-    sharing no vertex with them, and that triangle. Empty: the mesh does not pass through itself."""
+    sharing no vertex with them, and that triangle. Empty: the mesh does not pass through itself.
+
+    ``edges``: the mesh's :func:`~tailor.collide.grid.unique_edges`, if the caller keeps them (a check
+    every frame of one mesh)."""
     x = np.ascontiguousarray(vertices, dtype=np.float64)
     faces = np.ascontiguousarray(faces, dtype=np.int64)
     if not len(faces):
         return np.zeros((0, 3), np.int64)
-    edges = unique_edges(faces, len(x))
+    edges = unique_edges(faces, len(x)) if edges is None else np.ascontiguousarray(edges, dtype=np.int64)
     length = np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1)
     cell = max(2.0 * float(np.mean(length)), 1e-6)
-    used = x[np.unique(edges)]
-    lo, hi = used.min(axis=0), used.max(axis=0)
+    used = np.zeros(len(x), bool)
+    used[edges.ravel()] = True
+    lo, hi = x[used].min(axis=0), x[used].max(axis=0)
     grid = Grid(lo[None], hi[None], cell)
     pairs = _edge_crossings(x, faces, edges, grid.origin, grid.cell, grid.dims)
     return np.column_stack([edges[pairs[:, 0]], pairs[:, 1]]) if len(pairs) else np.zeros((0, 3), np.int64)

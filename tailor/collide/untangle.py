@@ -158,7 +158,7 @@ def _region_moves(x, faces, region, crossings, thickness: float):
     return moves
 
 
-def _untangle_regions(x, faces, inv_mass, thickness: float, crossings):
+def _untangle_regions(x, faces, inv_mass, thickness: float, crossings, edges):
     """The regions the ``crossings`` cut off moved back, in place, each kept only when the crossings
     drop; the crossings left."""
     for region in cut_regions(len(x), faces, crossings):
@@ -166,7 +166,7 @@ def _untangle_regions(x, faces, inv_mass, thickness: float, crossings):
         moves = _region_moves(x, faces, region, crossings, thickness) if len(region) else None
         if moves is None:
             continue
-        after = edge_crossings(x + moves, faces)
+        after = edge_crossings(x + moves, faces, edges)
         if len(after) < len(crossings):
             x += moves
             crossings = after
@@ -175,7 +175,7 @@ def _untangle_regions(x, faces, inv_mass, thickness: float, crossings):
     return crossings
 
 
-def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, rounds: int):
+def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, edges, rounds: int):
     """Up to ``rounds`` rounds of local pushes, in place, each kept only when the crossings drop;
     the crossings left."""
     for _ in range(rounds):
@@ -184,7 +184,7 @@ def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, rounds
         for joint in (True, False):  # every crossing by both ends' side; only the clear pokes when that is stuck
             y = x.copy()
             _push(y, inv_mass, faces, crossings, rings, thickness, joint)
-            after = edge_crossings(y, faces)
+            after = edge_crossings(y, faces, edges)
             if len(after) < len(crossings):
                 break
         if len(after) >= len(crossings):  # a tangle these local pushes make no better: left as it is
@@ -194,7 +194,7 @@ def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, rounds
     return crossings
 
 
-def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROUNDS, rings=None):
+def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROUNDS, rings=None, edges=None):
     """Push apart, in place, the edges of ``faces`` that pass through their own triangles at ``x``:
     rounds of local pushes, then the regions cut off by what is left moved back, and again while
     that helps (at most :data:`GLOBAL_PASSES` times).
@@ -206,14 +206,15 @@ def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROU
     faces = np.asarray(faces, np.int64)
     inv_mass = np.asarray(inv_mass, float)
     rings = vertex_rings(faces, len(x)) if rings is None else rings
-    crossings = edge_crossings(x, faces)
+    edges = unique_edges(faces, len(x)) if edges is None else edges
+    crossings = edge_crossings(x, faces, edges)
     found = len(crossings)
     for _ in range(GLOBAL_PASSES):
-        crossings = _local_rounds(x, faces, inv_mass, thickness, crossings, rings, rounds)
+        crossings = _local_rounds(x, faces, inv_mass, thickness, crossings, rings, edges, rounds)
         if not len(crossings):
             break
         before = len(crossings)
-        crossings = _untangle_regions(x, faces, inv_mass, thickness, crossings)
+        crossings = _untangle_regions(x, faces, inv_mass, thickness, crossings, edges)
         if len(crossings) == before:
             break
     return found, len(crossings)
