@@ -129,6 +129,7 @@ def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_
     """Each chunk of queries writes into room for a few pairs a query; a chunk that overflows (a dense
     crumple) is written again in full. The pairs, and their order, are those of counting first."""
     from tailor.collide.grid import _GUESS_CHUNK, _GUESS_PAIRS, _ee_pairs, _ee_pairs_guessed
+    from tailor.collide.patch_pairs import NO_PATCH_PAIRS
 
     rng = np.random.default_rng(6)
     n = 4 * _GUESS_CHUNK
@@ -140,7 +141,8 @@ def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_
     dirty = rng.random(n) < 0.8
     grid = Grid(lo - 0.02, hi + 0.02, 0.02)
     ring = (np.zeros(2 * n + 1, np.int64), np.zeros(0, np.int64))
-    args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02, *ring)
+    args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02, *ring,
+            NO_PATCH_PAIRS)
     (want, want_near), (got, got_near) = _ee_pairs(*args), _ee_pairs_guessed(*args)
     first = np.isin(want[:, 0] // 2, np.arange(_GUESS_CHUNK)).sum()
     assert first > _GUESS_CHUNK * _GUESS_PAIRS and len(want) - first > 100  # one chunk overflowed, the others did not
@@ -172,3 +174,40 @@ def test_vertex_triangle_pairs_overflowing_their_room_are_searched_again_in_vert
     assert np.all(np.diff(rank[v]) >= 0)  # grouped by vertex, in the given order
     got = set(zip(v.tolist(), t.tolist()))
     assert len(got) == len(v) and got == {(verts[i], k) for i, k in zip(*np.nonzero(want))}
+
+
+def test_searches_filtered_by_patch_pairs_find_what_the_patches_filter_keeps_of_the_unfiltered_ones():
+    """The searches test the patch rule before writing a pair out (:mod:`tailor.collide.patch_pairs`):
+    on a crumpled sheet they return, in order, exactly the unfiltered pairs that ``Regions`` allows,
+    plus every pair with a free vertex at each end (a kept seam's, checked by the caller)."""
+    from tailor.collide.grid import unique_edges, vertex_rings
+    from tailor.collide.regions import Regions
+    from tailor.scenes import grid as sheet
+
+    mesh = sheet(0.4, 0.4, 21)
+    faces = np.asarray(mesh.faces, np.int64)
+    rng = np.random.default_rng(11)
+    x = np.c_[mesh.uv, np.zeros(len(mesh.uv))]
+    x[:, 2] = 0.01 * np.sin(12.0 * x[:, 1]) + rng.normal(0.0, 0.0005, len(x))  # a gentle wave
+    x[:, 0] = np.where(x[:, 0] > 0.3, 0.6 - x[:, 0], x[:, 0])  # a strip folded back over itself along x = 0.3
+    x[mesh.uv[:, 0] > 0.3, 2] += 0.008
+    regions = Regions(faces, np.zeros(len(faces), np.int64), x, 0.05)
+    pairs = regions.touching(x, None, 0.006)[1]
+    edges = unique_edges(faces, len(x))
+    free = np.zeros(len(x), bool)
+    free[rng.choice(len(x), 60, replace=False)] = True
+    ring = vertex_rings(faces, len(x))
+    filt = regions.patch_pairs(pairs, regions.edge_patches(edges), free).arrays()
+    verts, every = np.arange(len(x)), np.arange(len(faces))  # the flat part too: its pairs are filtered out
+    v0, t0, _ = vertex_triangle_pairs(verts, every, faces, x, x, x, 0.025, 0.04, ring, exact=True)
+    v1, t1, _ = vertex_triangle_pairs(verts, every, faces, x, x, x, 0.025, 0.04, ring, exact=True, patch_pairs=filt)
+    allowed = regions.allowed_vertex_triangle(pairs, v0, t0)
+    keep = allowed | (free[v0] & free[faces[t0]].any(axis=1))
+    assert allowed.sum() < keep.sum() < len(keep)  # the flat part's pairs filtered out, the free ones let through
+    assert np.array_equal(v1, v0[keep]) and np.array_equal(t1, t0[keep])
+    ids = np.arange(len(edges))
+    e0, _ = edge_edge_pairs(ids, edges, x, x, 0.025, 0.04, ring)
+    e1, _ = edge_edge_pairs(ids, edges, x, x, 0.025, 0.04, ring, patch_pairs=filt)
+    allowed = regions.allowed_edge_edge(pairs, e0)
+    keep = allowed | (free[e0[:, :2]].any(axis=1) & free[e0[:, 2:]].any(axis=1))
+    assert allowed.sum() < keep.sum() < len(keep) and np.array_equal(e1, e0[keep])

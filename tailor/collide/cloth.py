@@ -59,6 +59,7 @@ from ..errors import SimulationUnstable
 from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
                             touching, touching_vt, unique_ints)
 from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
+from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
 from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
 
@@ -161,6 +162,7 @@ class SelfCollider:
         if patch is None:
             patch = max(PATCH_MIN, PATCH_EDGES * float(np.mean(length))) if len(length) else 0.1
         self.regions = Regions(self.faces, np.asarray(face_group), np.asarray(x, float), patch)
+        self._edge_patches = self.regions.edge_patches(self._edges)  # each edge's patches, for the searches' filter
         self._ee = np.zeros((0, 4), np.int64)
         self._anchor = None  # (N, 3) each vertex's position relative to the centroid when last queried
         self._active = None  # (F,) bool: the faces the candidates were found among
@@ -237,22 +239,29 @@ class SelfCollider:
         self._find(rx, lo, hi, faces, dirty, exact=rxp is None)
         self.stats["query_s"] += time.perf_counter() - t0
 
-    def _in_touching_patches(self, vertex, tri, ee):
-        """(vertex–triangle, edge–edge) candidates kept: those of patch pairs that can touch, and
-        those :meth:`ignore` keeps across an open seam (the seam's two sides, closing edge to edge,
-        lie flat together: their patches would not be a pair that can touch)."""
+    def _patch_pairs(self):
+        """The filter the searches test each candidate against before writing it out
+        (:meth:`Regions.patch_pairs`): the patch pairs that can touch, and the vertices of the pairs
+        :meth:`ignore` keeps across an open seam (the seam's two sides, closing edge to edge, lie flat
+        together: their patches would not be a pair that can touch). Every pair if no patch pairs."""
         if self._pairs is None:
-            return np.ones(len(vertex), bool), np.ones(len(ee), bool)
-        keep_vt = self.regions.allowed_vertex_triangle(self._pairs, vertex, tri)
-        keep_ee = self.regions.allowed_edge_edge(self._pairs, ee)
-        if self._kept is not None:  # only those the patches turned away, with a kept pair's vertex at each end, can be saved
-            free = self._keeping
-            out = np.flatnonzero(~keep_vt)
-            out = out[free[vertex[out]] & free[self.faces[tri[out]]].any(axis=1)]
-            keep_vt[out] = self._is_kept(vertex[out, None], self.faces[tri[out]]).any(axis=1)
-            out = np.flatnonzero(~keep_ee)
-            out = out[free[ee[out, :2]].any(axis=1) & free[ee[out, 2:]].any(axis=1)]
-            keep_ee[out] = self._is_kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1)
+            return NO_PATCH_PAIRS
+        return self.regions.patch_pairs(self._pairs, self._edge_patches, self._keeping).arrays()
+
+    def _in_touching_patches(self, vertex, tri, ee):
+        """(vertex–triangle, edge–edge) candidates kept of those the filtered search let through: every
+        one of a patch pair that can touch, and of those it let through for a kept pair's vertex at
+        each end, only the kept pairs."""
+        keep_vt, keep_ee = np.ones(len(vertex), bool), np.ones(len(ee), bool)
+        if self._pairs is None or self._kept is None:
+            return keep_vt, keep_ee
+        free = self._keeping
+        out = np.flatnonzero(free[vertex] & free[self.faces[tri]].any(axis=1))
+        keep_vt[out] = (self.regions.allowed_vertex_triangle(self._pairs, vertex[out], tri[out])
+                        | self._is_kept(vertex[out, None], self.faces[tri[out]]).any(axis=1))
+        out = np.flatnonzero(free[ee[:, :2]].any(axis=1) & free[ee[:, 2:]].any(axis=1))
+        keep_ee[out] = (self.regions.allowed_edge_edge(self._pairs, ee[out])
+                        | self._is_kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1))
         return keep_vt, keep_ee
 
     def _find(self, x, lo, hi, faces, dirty, *, exact):
@@ -263,18 +272,19 @@ class SelfCollider:
         # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
         # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
         # (ignoring those, a strip crumpling over one or two triangles passed through itself)
+        patch_pairs = self._patch_pairs()
         find = partial(vertex_triangle_pairs, faces=self.faces, lo=lo, hi=hi, x=x, radius=radius, cell=self._grid_cell,
-                       ring=self._ring_csr, exact=exact)
+                       ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs)
         edge_ids = unique_ints(self._face_edges[faces].ravel())
         if dirty is None:
             vertex, tri, near = find(verts, faces)
-            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, None)
+            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, None, patch_pairs)
         else:
             dirty_face = touching(self.faces[faces], dirty)
             moved = dirty[verts]
             parts = (find(verts[moved], faces), find(verts[~moved], faces[dirty_face]))
             vertex, tri, near = (np.concatenate(p) for p in zip(*parts))
-            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty))
+            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty), patch_pairs)
         keep_vt, keep_ee = self._in_touching_patches(vertex, tri, ee)
         vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
         vertex, tri, near, ee, ee_near = self._drop_ignored(vertex, tri, near, ee, ee_near)
@@ -291,11 +301,11 @@ class SelfCollider:
         self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
 
-    def _edge_pairs(self, ids, lo, hi, dirty):
+    def _edge_pairs(self, ids, lo, hi, dirty, patch_pairs):
         if not self.edges:
             return np.zeros((0, 4), np.int64), np.zeros(0, bool)
         return edge_edge_pairs(ids, self._edges, lo, hi, self.thickness + self.margin, self._grid_cell, self._ring_csr,
-                               dirty=dirty)
+                               dirty=dirty, patch_pairs=patch_pairs)
 
     def _tri_sides(self, vertex, tri):
         """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit, prange
 
 from .closest import closest_barycentric
+from .patch_pairs import NO_PATCH_PAIRS, edge_edge_passes, vertex_triangle_passes
 
 __all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "gap2", "owns", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
 
@@ -197,7 +198,7 @@ def _joined(out, out_near, used, room):
 
 @njit(cache=True)
 def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell, dims,
-            r, exact, limit=-1):
+            r, exact, patch_pairs, limit=-1):
     """Write (rows (vertex, triangle) of ``out`` from ``start``) and count the triangles within ``r``
     of active vertex ``q``; with ``limit`` ≥ 0 none is written at or beyond it (they are still counted)."""
     p = verts[q]
@@ -214,6 +215,8 @@ def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo
                     if _shares(p, f) or gap2(v_lo[q], v_hi[q], t_lo[t], t_hi[t]) > r2:
                         continue
                     if not owns(v_lo[q], t_lo[t], r, a, b, c, origin, cell, dims):
+                        continue
+                    if not vertex_triangle_passes(patch_pairs, p, f, tris[t]):
                         continue
                     if exact:
                         u, v, w = closest_barycentric(x[p], x[f[0]], x[f[1]], x[f[2]])
@@ -234,7 +237,7 @@ def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo
 
 
 @njit(cache=True, parallel=True)
-def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx):
+def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx, patch_pairs):
     """The triangles of every active vertex in one pass where they fit (as :func:`_ee_pairs_guessed`)."""
     ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
     n = len(verts)
@@ -243,7 +246,7 @@ def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims,
         written = 0
         for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
             written += _vt_one(q, out, out_near, ch * room + written, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris,
-                               faces, x, ptr, items, origin, cell, dims, r, exact, (ch + 1) * room)
+                               faces, x, ptr, items, origin, cell, dims, r, exact, patch_pairs, (ch + 1) * room)
         used[ch] = written
     pairs, near, starts = _joined(out, out_near, used, room)
     for ch in range(chunks):
@@ -251,18 +254,20 @@ def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims,
             pos = starts[ch]
             for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
                 pos += _vt_one(q, pairs, near, pos, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items,
-                               origin, cell, dims, r, exact)
+                               origin, cell, dims, r, exact, patch_pairs)
     return pairs, near
 
 
-def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool):
+def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool,
+                          patch_pairs=NO_PATCH_PAIRS):
     """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
     ``verts`` against each of the triangles ``tris`` (rows of ``faces``) not at it whose boxes come
     within ``radius``; ``near``: whether a corner of the triangle is a neighbour of the vertex
     (``ring`` = (ptr, idx): each vertex's neighbours, CSR: :func:`vertex_rings`).
 
     ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step; both ``x`` for points).
-    With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``.
+    With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``. Only the
+    pairs ``patch_pairs`` lets through (:meth:`~tailor.collide.patch_pairs.PatchPairs.arrays`; default: all).
     """
     verts = np.ascontiguousarray(verts, np.int64)
     tris = np.ascontiguousarray(tris, np.int64)
@@ -273,13 +278,13 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     v_lo, v_hi = np.ascontiguousarray(lo[verts]), np.ascontiguousarray(hi[verts])
     grid = Grid(np.vstack([t_lo, v_lo - radius]), np.vstack([t_hi, v_hi + radius]), cell)
     pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
-                            grid.cell, grid.dims, float(radius), bool(exact), *ring)
+                            grid.cell, grid.dims, float(radius), bool(exact), *ring, patch_pairs)
     return np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1]), near
 
 
 @njit(cache=True)
 def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin, cell, dims, r,
-            limit=-1):
+            patch_pairs, limit=-1):
     """Count (``fill`` False) or write the edges within ``r`` of edge ``q``, sharing no end: every
     clean one, and the dirty ones after it (each dirty pair once); with ``limit`` ≥ 0 none is written
     at or beyond it (they are still counted)."""
@@ -302,6 +307,8 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                         continue
                     if not owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
                         continue
+                    if not edge_edge_passes(patch_pairs, ids[q], ids[s], a0, a1, b0, b1):
+                        continue
                     if fill and (limit < 0 or start + found < limit):
                         out[start + found, 0] = a0
                         out[start + found, 1] = a1
@@ -316,7 +323,7 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
+def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx, patch_pairs):
     """:func:`_ee_pairs` in one pass where it can: each chunk of :data:`_GUESS_CHUNK` queries writes
     into room for :data:`_GUESS_PAIRS` pairs a query; the chunks' pairs are joined in order and only a
     chunk that overflowed is searched again, straight into its place (the same pairs, in the same order)."""
@@ -328,7 +335,7 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
         written = 0
         for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
             written += _ee_one(queries[k], True, out, out_near, first + written, ring_ptr, ring_idx, ids, edges, e_lo, e_hi,
-                               dirty, ptr, items, origin, cell, dims, r, end)
+                               dirty, ptr, items, origin, cell, dims, r, patch_pairs, end)
         used[ch] = written
     pairs, near, starts = _joined(out, out_near, used, room)
     for ch in range(chunks):
@@ -336,12 +343,12 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
             pos = starts[ch]
             for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
                 pos += _ee_one(queries[k], True, pairs, near, pos, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items,
-                               origin, cell, dims, r)
+                               origin, cell, dims, r, patch_pairs)
     return pairs, near
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx):
+def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx, patch_pairs):
     """The edge pairs of every query, counted in one pass and written in a second: the reference
     :func:`_ee_pairs_guessed` is checked against (tests/test_grid.py)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
@@ -350,23 +357,24 @@ def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, rin
     no = np.zeros(0, np.bool_)
     for k in prange(len(queries)):
         counts[k] = _ee_one(queries[k], False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
-                            cell, dims, r)
+                            cell, dims, r, patch_pairs)
     starts = np.zeros(len(queries) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out = np.empty((starts[-1], 4), np.int64)
     out_near = np.empty(starts[-1], np.bool_)
     for k in prange(len(queries)):
         _ee_one(queries[k], True, out, out_near, starts[k], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
-                cell, dims, r)
+                cell, dims, r, patch_pairs)
     return out, out_near
 
 
-def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None):
+def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None, patch_pairs=NO_PATCH_PAIRS):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
     share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
     pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
     :func:`vertex_triangle_pairs`). With ``dirty`` ((len(ids),) bool), only the pairs with at least
-    one dirty edge (the others are known from an earlier query)."""
+    one dirty edge (the others are known from an earlier query). Only the pairs ``patch_pairs`` lets
+    through (as in :func:`vertex_triangle_pairs`; its edges are the rows of ``edges``)."""
     ids = np.ascontiguousarray(ids, np.int64)
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
@@ -376,4 +384,4 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dir
     e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
     grid = Grid(e_lo - radius, e_hi + radius, cell)
     return _ee_pairs_guessed(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
-                             grid.origin, grid.cell, grid.dims, float(radius), *ring)
+                             grid.origin, grid.cell, grid.dims, float(radius), *ring, patch_pairs)

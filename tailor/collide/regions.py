@@ -26,6 +26,7 @@ from numba import njit, prange
 
 from .cloth_kernels import unique_ints
 from .grid import overlapping_boxes
+from .patch_pairs import PatchPairs, edge_patches
 
 __all__ = ["Regions", "in_sorted", "FOLDED_COS", "PATCH_EDGES", "PATCH_MIN"]
 
@@ -187,6 +188,17 @@ class Regions:
             _allowed_ee(np.ascontiguousarray(ee, np.int64), self._vertex_patch_ptr, self._vertex_patches, pairs,
                         self.count, out)
         return out
+
+    def edge_patches(self, edges):
+        """CSR (ptr, patches) of the patches holding both ends of each of ``edges`` ((E, 2) vertices)."""
+        return edge_patches(edges, self._vertex_patch_ptr, self._vertex_patches)
+
+    def patch_pairs(self, pairs, edge_csr, free=None) -> PatchPairs:
+        """The patch ``pairs`` (sorted keys, :meth:`touching`) as the filter a grid search tests each
+        candidate against before writing it out (:mod:`~tailor.collide.patch_pairs`); ``edge_csr``:
+        :meth:`edge_patches` of the search's edges; ``free``: vertices whose pairs pass."""
+        return PatchPairs(pairs, self.count, self._vertex_patch_ptr, self._vertex_patches,
+                          np.ascontiguousarray(self.face_patch, np.int64), *edge_csr, free)
 
     def vertices_of(self, pairs):
         """(N,) bool: the vertices of the patches in the patch ``pairs`` (keys ``p · count + q``)."""
