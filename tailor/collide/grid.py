@@ -258,6 +258,21 @@ def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims,
     return pairs, near
 
 
+@njit(cache=True, parallel=True)
+def _boxes_of(lo, hi, elements, rows):
+    """(lo, hi) (K, 3) of the box round each element ``elements[rows[k]]`` (vertex indices: a face's
+    three, an edge's two) from its vertices' boxes ``lo``/``hi``."""
+    out_lo, out_hi = np.empty((len(rows), 3)), np.empty((len(rows), 3))
+    for k in prange(len(rows)):
+        e = elements[rows[k]]
+        for a in range(3):
+            out_lo[k, a], out_hi[k, a] = lo[e[0], a], hi[e[0], a]
+            for m in range(1, len(e)):
+                out_lo[k, a] = min(out_lo[k, a], lo[e[m], a])
+                out_hi[k, a] = max(out_hi[k, a], hi[e[m], a])
+    return out_lo, out_hi
+
+
 def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool,
                           patch_pairs=NO_PATCH_PAIRS):
     """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
@@ -273,10 +288,12 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     tris = np.ascontiguousarray(tris, np.int64)
     if not len(verts) or not len(tris):
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, bool)
-    corners_lo, corners_hi = lo[faces[tris]], hi[faces[tris]]
-    t_lo, t_hi = np.ascontiguousarray(corners_lo.min(axis=1)), np.ascontiguousarray(corners_hi.max(axis=1))
-    v_lo, v_hi = np.ascontiguousarray(lo[verts]), np.ascontiguousarray(hi[verts])
-    grid = Grid(np.vstack([t_lo, v_lo - radius]), np.vstack([t_hi, v_hi + radius]), cell)
+    lo, hi = np.ascontiguousarray(lo, np.float64), np.ascontiguousarray(hi, np.float64)
+    faces = np.ascontiguousarray(faces, np.int64)
+    t_lo, t_hi = _boxes_of(lo, hi, faces, tris)
+    v_lo, v_hi = lo[verts], hi[verts]
+    grid = Grid(np.vstack([t_lo.min(axis=0), v_lo.min(axis=0) - radius]), np.vstack([t_hi.max(axis=0), v_hi.max(axis=0) + radius]),
+                cell)
     pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
                             grid.cell, grid.dims, float(radius), bool(exact), *ring, patch_pairs)
     return np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1]), near
@@ -379,9 +396,8 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dir
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
     dirty = np.ones(len(ids), np.bool_) if dirty is None else np.ascontiguousarray(dirty, np.bool_)
-    ends = edges[ids]
-    e_lo = np.ascontiguousarray(np.minimum(lo[ends[:, 0]], lo[ends[:, 1]]))
-    e_hi = np.ascontiguousarray(np.maximum(hi[ends[:, 0]], hi[ends[:, 1]]))
-    grid = Grid(e_lo - radius, e_hi + radius, cell)
-    return _ee_pairs_guessed(ids, np.ascontiguousarray(edges, np.int64), e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
+    edges = np.ascontiguousarray(edges, np.int64)
+    e_lo, e_hi = _boxes_of(np.ascontiguousarray(lo, np.float64), np.ascontiguousarray(hi, np.float64), edges, ids)
+    grid = Grid(e_lo.min(axis=0)[None] - radius, e_hi.max(axis=0)[None] + radius, cell)
+    return _ee_pairs_guessed(ids, edges, e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
                              grid.origin, grid.cell, grid.dims, float(radius), *ring, patch_pairs)
