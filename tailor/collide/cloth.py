@@ -57,7 +57,7 @@ import numpy as np
 
 from ..errors import SimulationUnstable
 from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
-                            touching, touching_vt, unique_ints)
+                            present, touching, touching_vt, unique_ints)
 from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
@@ -267,7 +267,7 @@ class SelfCollider:
     def _find(self, x, lo, hi, faces, dirty, *, exact):
         """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the
         pairs touching a dirty vertex added to the kept ones that touch none."""
-        verts = unique_ints(self.faces[faces].ravel())
+        verts = present(self.faces[faces].ravel(), self.n)
         radius = self.thickness + self.margin
         # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
         # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
@@ -275,7 +275,7 @@ class SelfCollider:
         patch_pairs = self._patch_pairs()
         find = partial(vertex_triangle_pairs, faces=self.faces, lo=lo, hi=hi, x=x, radius=radius, cell=self._grid_cell,
                        ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs)
-        edge_ids = unique_ints(self._face_edges[faces].ravel())
+        edge_ids = present(self._face_edges[faces].ravel(), len(self._edges))
         if dirty is None:
             vertex, tri, near = find(verts, faces)
             ee, ee_near = self._edge_pairs(edge_ids, lo, hi, None, patch_pairs)

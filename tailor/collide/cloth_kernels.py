@@ -15,7 +15,7 @@ from numba import njit, prange
 
 from .broad import run_starts
 
-__all__ = ["detect_vt", "detect_vt_serial", "detect_ee", "detect_ee_serial", "pair_motion", "resolve_contacts",
+__all__ = ["detect_vt", "detect_vt_serial", "detect_ee", "detect_ee_serial", "pair_motion", "resolve_contacts", "present",
            "unique_ints", "touching", "touching_vt", "NEAR_THICKNESS", "PARALLEL_PAIRS"]
 
 NEAR_THICKNESS = 0.25
@@ -31,6 +31,14 @@ def unique_ints(a):
     far slower on millions of keys: docs/measurements.md)."""
     a = np.sort(a)
     return a[run_starts(a)] if len(a) else a
+
+
+def present(a, size: int):
+    """Sorted distinct values of an integer array ``a`` of values in [0, ``size``), by a mask (as
+    :func:`unique_ints`, without a sort: the vertices of an active set of faces)."""
+    mask = np.zeros(size, np.bool_)
+    mask[a] = True
+    return np.flatnonzero(mask)
 
 
 @njit(cache=True, parallel=True)
