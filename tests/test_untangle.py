@@ -1,11 +1,15 @@
 """Untangling (`tailor/collide/untangle.py`): a vertex poked through cloth goes back to its own side,
 pinned cloth stays, and a tangle the local pushes cannot improve is left exactly as it was."""
 
+import sys
+
 import numpy as np
 import pytest
 
 from tailor.collide import edge_crossings, untangle
 from tailor.collide.untangle import cut_regions
+
+untangle_module = sys.modules["tailor.collide.untangle"]
 from tailor.scenes import grid
 
 
@@ -41,19 +45,51 @@ def test_pinned_vertices_stay_and_the_free_side_takes_the_whole_push():
     assert x[25 + 12, 2] == pytest.approx(0.001)  # the whole push: thickness above the pinned sheet
 
 
-def test_a_tangle_local_pushes_cannot_improve_is_left_exactly_as_it_was():
+def _sheet_through_sheet():
     # a sheet straight through another, edge-on: half of it on each side, no side to push to
     mesh = grid(0.1, 0.1, 6)
     a = np.c_[mesh.uv - 0.05, np.zeros(mesh.vertex_count)]
     b = np.c_[mesh.uv[:, 0] - 0.05 + 0.004, np.full(mesh.vertex_count, 0.003), mesh.uv[:, 1] - 0.05]  # upright
-    x = np.vstack([a, b])
-    faces = np.vstack([mesh.faces, mesh.faces + mesh.vertex_count])
+    return np.vstack([a, b]), np.vstack([mesh.faces, mesh.faces + mesh.vertex_count])
+
+
+def test_a_tangle_local_pushes_cannot_improve_is_left_exactly_as_it_was(monkeypatch):
+    x, faces = _sheet_through_sheet()
     count = len(edge_crossings(x, faces))
     assert count > 0
     before = x.copy()
+    monkeypatch.setattr(untangle_module, "_slide_borders", lambda x, faces, im, th, crossings, edges, borders: crossings)
     found, left = untangle(x, faces, np.ones(len(x)), 0.001)
     assert found == left == count  # every crossing has a poked end on each side, or none: no push is tried
     assert np.array_equal(x, before)
+
+
+def test_a_cut_reaching_a_border_is_unzipped_from_it_but_never_made_worse():
+    """Where the cut meets a sheet's border the sheets are hooked: sliding off the border lowers the
+    crossings (the cut through the middle stays), moving no vertex more than an edge (2 cm)."""
+    x, faces = _sheet_through_sheet()
+    before = x.copy()
+    found, left = untangle(x, faces, np.ones(len(x)), 0.001)
+    assert 0 < left < found and len(edge_crossings(x, faces)) == left
+    assert np.linalg.norm(x - before, axis=1).max() <= 0.02 * np.sqrt(3)
+
+
+def test_cloth_hooked_over_a_border_edge_goes_over_it():
+    """A top tucked in a band crossing it just under its top edge while the top edge passes through
+    the top (a tucked T-shirt at the band's side seam): no local push can tell a side, the border
+    slide takes the top over the band's edge; the band, attached, stays."""
+    band = grid(0.1, 0.04, 6, 3)  # upright, its top border at z = 4 cm
+    x = np.vstack([np.c_[band.uv[:, 0] - 0.05, np.zeros(band.vertex_count), band.uv[:, 1]],
+                   [[0.0, -0.005, 0.03], [0.0, 0.005, 0.05], [0.03, 0.002, 0.045]]])  # inside below, outside above
+    n = band.vertex_count
+    faces = np.vstack([band.faces, [[n, n + 1, n + 2]]])
+    crossings = edge_crossings(x, faces)
+    assert len(crossings) == 2 and {tuple(sorted(c[:2])) for c in crossings} >= {(n, n + 1)}
+    before = x.copy()
+    found, left = untangle(x, faces, np.r_[np.zeros(n), np.ones(3)], 0.001)
+    assert (found, left) == (2, 0) and len(edge_crossings(x, faces)) == 0
+    assert np.array_equal(x[:n], before[:n])
+    assert np.all(x[n:, 2] > before[n:, 2])  # up, over the band's top edge
 
 
 def test_the_contact_pipeline_untangles_and_self_collision_then_keeps_the_new_sides():

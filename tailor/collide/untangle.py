@@ -175,6 +175,118 @@ def _untangle_regions(x, faces, inv_mass, thickness: float, crossings, edges):
     return crossings
 
 
+class _Borders:
+    """The mesh's border edges (those of one face): per face which of its edges is one, per border
+    edge its face's third vertex (the side the cloth lies on)."""
+
+    def __init__(self, faces, n: int):
+        self.n = n
+        keys = np.stack([_key(faces[:, k], faces[:, (k + 1) % 3], n) for k in range(3)], axis=1)
+        distinct, count = np.unique(keys, return_counts=True)
+        self.border = distinct[count == 1]
+        self.face_border = np.isin(keys, self.border)  # (F, 3): edge k of face f (corners k, k + 1) is a border edge
+        f, k = np.nonzero(self.face_border)
+        self.border_third = faces[f, (k + 2) % 3][np.argsort(keys[f, k])]  # aligned with the sorted ``border``
+
+    def third(self, i, j):
+        """(K,) the third vertex of the face of each edge (i, j), or −1 where it is no border edge."""
+        key = _key(i, j, self.n)
+        at = np.minimum(np.searchsorted(self.border, key), max(len(self.border) - 1, 0))
+        hit = (self.border[at] == key) if len(self.border) else np.zeros(len(key), bool)
+        return np.where(hit, self.border_third[at] if len(self.border) else -1, -1)
+
+
+def _key(i, j, n):
+    return np.minimum(i, j).astype(np.int64) * n + np.maximum(i, j)
+
+
+def _beyond(x, a, b, toward):
+    """Unit directions in the plane of each edge a–b and its face's third vertex, perpendicular to the
+    edge and pointing away from that vertex (``toward`` the border's outside is minus this)."""
+    e = x[b] - x[a]
+    e /= np.maximum(np.linalg.norm(e, axis=1, keepdims=True), 1e-300)
+    w = x[a] - x[toward]
+    out = w - np.einsum("ij,ij->i", w, e)[:, None] * e
+    return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-300)
+
+
+def _border_slides(x, faces, inv_mass, thickness: float, crossings, borders: _Borders):
+    """(N, 3) moves sliding cloth off a border it is hooked on, or None.
+
+    A hook is two crossings at once: an edge through a triangle that has a border edge, and that
+    border edge through a triangle at the first edge (a top tucked in a band, crossing the band just
+    under its top edge while the band's top edge passes through the top). The edge's ends go over
+    the border (the top goes over the band), and the triangles the border edge passes through slide
+    off beyond it; never by more than the crossing edge (its triangle's longest edge), so a cut far
+    from any border is no hook. Moves are averaged per vertex; pinned vertices stay."""
+    i, j, t = np.asarray(crossings, np.int64).T
+    tri = faces[t]
+    a, b, c = x[tri[:, 0]], x[tri[:, 1]], x[tri[:, 2]]
+    normal = np.cross(b - a, c - a)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    si, sj = np.einsum("ij,ij->i", x[i] - a, normal), np.einsum("ij,ij->i", x[j] - a, normal)
+    pierce = x[i] + (si / np.where(si != sj, si - sj, 1.0))[:, None] * (x[j] - x[i])
+    hooks = _hooks(i, j, t, faces, borders)
+    move, count = np.zeros_like(x), np.zeros(len(x))
+
+    def add(ids, shift, limit):
+        free = (inv_mass[ids] > 0) & (np.linalg.norm(shift, axis=1) <= limit)
+        np.add.at(move, ids[free], shift[free])
+        np.add.at(count, ids[free], 1.0)
+
+    for k in range(3):  # the crossed triangle's border edge k (corners k, k + 1) in a hook: the edge goes over it
+        rows = np.flatnonzero(hooks[:, k])
+        p, q, r = tri[rows, k], tri[rows, (k + 1) % 3], tri[rows, (k + 2) % 3]
+        way = _beyond(x, p, q, r)
+        shift = (np.einsum("ij,ij->i", x[p] - pierce[rows], way) + thickness)[:, None] * way
+        limit = np.linalg.norm(x[i[rows]] - x[j[rows]], axis=1)
+        for end in (i[rows], j[rows]):
+            add(end, shift, limit)
+    rows = np.flatnonzero(hooks[:, 3])  # the crossing edge a border in a hook: the triangle slides off beyond it
+    w = borders.third(i[rows], j[rows])
+    out = _beyond(x, i[rows], j[rows], w)
+    h = np.max(np.einsum("ikj,ij->ik", pierce[rows, None] - x[tri[rows]], out), axis=1) + thickness
+    limit = np.linalg.norm(x[tri[rows]] - x[np.roll(tri[rows], 1, axis=1)], axis=2).max(axis=1)
+    for corner in range(3):
+        add(tri[rows, corner], h[:, None] * out, limit)
+    if not count.any():
+        return None
+    return move / np.maximum(count, 1.0)[:, None]
+
+
+def _hooks(i, j, t, faces, borders: _Borders):
+    """(K, 4) bool per crossing (edge i–j through triangle t): column k < 3, the triangle's edge k
+    (corners k, k + 1) is a border edge passing through a triangle at i or j; column 3, the edge i–j
+    is a border edge and an edge of the triangle passes through the border's face (at i and j).
+    Crossings are few when this is asked (the local and region moves are stuck): a loop."""
+    n = borders.n
+    through = {}  # edge key → the corner sets of the triangles it passes through
+    for a, b, tr in zip(i.tolist(), j.tolist(), t.tolist()):
+        through.setdefault(a * n + b if a < b else b * n + a, []).append(set(faces[tr].tolist()))
+    out = np.zeros((len(i), 4), bool)
+    lone = borders.face_border[t]
+    for r, (a, b, tr) in enumerate(zip(i.tolist(), j.tolist(), t.tolist())):
+        f = faces[tr].tolist()
+        keys = [min(f[k], f[(k + 1) % 3]) * n + max(f[k], f[(k + 1) % 3]) for k in range(3)]
+        for k in range(3):
+            out[r, k] = lone[r, k] and any(a in c or b in c for c in through.get(keys[k], ()))
+        out[r, 3] = any(a in c and b in c for key in keys for c in through.get(key, ()))
+    out[:, 3] &= borders.third(i, j) >= 0
+    return out
+
+
+def _slide_borders(x, faces, inv_mass, thickness: float, crossings, edges, borders):
+    """:func:`_border_slides` applied in place when it lowers the crossings; the crossings left."""
+    moves = _border_slides(x, faces, inv_mass, thickness, crossings, borders)
+    if moves is None:
+        return crossings
+    after = edge_crossings(x + moves, faces, edges)
+    if len(after) < len(crossings):
+        x += moves
+        return after
+    return crossings
+
+
 def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, edges, rounds: int):
     """Up to ``rounds`` rounds of local pushes, in place, each kept only when the crossings drop;
     the crossings left."""
@@ -209,12 +321,16 @@ def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROU
     edges = unique_edges(faces, len(x)) if edges is None else edges
     crossings = edge_crossings(x, faces, edges)
     found = len(crossings)
+    borders = None  # found only when the local and region moves are stuck
     for _ in range(GLOBAL_PASSES):
         crossings = _local_rounds(x, faces, inv_mass, thickness, crossings, rings, edges, rounds)
         if not len(crossings):
             break
         before = len(crossings)
         crossings = _untangle_regions(x, faces, inv_mass, thickness, crossings, edges)
+        if len(crossings) == before:
+            borders = _Borders(faces, len(x)) if borders is None else borders
+            crossings = _slide_borders(x, faces, inv_mass, thickness, crossings, edges, borders)
         if len(crossings) == before:
             break
     return found, len(crossings)
