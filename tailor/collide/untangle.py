@@ -200,12 +200,12 @@ def _key(i, j, n):
     return np.minimum(i, j).astype(np.int64) * n + np.maximum(i, j)
 
 
-def _beyond(x, a, b, toward):
-    """Unit directions in the plane of each edge a–b and its face's third vertex, perpendicular to the
-    edge and pointing away from that vertex (``toward`` the border's outside is minus this)."""
+def _beyond(x, a, b, third):
+    """Unit directions in the plane of each edge a–b and its face's ``third`` vertex, perpendicular to
+    the edge and pointing away from that vertex: out of the face, beyond the edge."""
     e = x[b] - x[a]
     e /= np.maximum(np.linalg.norm(e, axis=1, keepdims=True), 1e-300)
-    w = x[a] - x[toward]
+    w = x[a] - x[third]
     out = w - np.einsum("ij,ij->i", w, e)[:, None] * e
     return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-300)
 
