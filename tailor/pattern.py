@@ -357,7 +357,11 @@ def validate_pattern(pattern: Pattern) -> Pattern:
 def _loop_polygon(pattern, panel, hole):
     curves = [e.curve for e in panel.loop(hole)]
     where = panel.where(hole=hole)
-    pts = loop_polyline(curves)
+    with np.errstate(invalid="ignore", over="ignore"):
+        pts = loop_polyline(curves)
+        if not np.all(np.isfinite(pts)):  # a curve's parameters beyond what a float can place
+            edge = next(k for k, c in enumerate(curves) if not np.all(np.isfinite(loop_polyline([c]))))
+            pattern.fail(panel.where(edge=edge, hole=hole), "curve is out of range (its points are not finite numbers)")
     poly = Polygon(pts)
     if make_valid(poly).area < 1e-8:  # below 0.01 cm² of fabric
         pattern.fail(where, "outline has zero area")

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import doc_with, gc_skirt_doc, rect_panel
+from conftest import PANELS, doc_with, gc_skirt_doc, rect_panel
 from tailor.errors import PatternError, SeamError
 from tailor.io import pattern_from_dict, read_pattern
 
@@ -125,6 +125,14 @@ def test_bad_numbers(square_doc, field, value, needle):
         node = node[k]
     node[field[-1]] = value
     assert needle in error_of(square_doc)
+
+
+def test_a_curve_beyond_what_a_float_can_place_names_its_edge():
+    """A curvature of 1e169 (a mutated file, found by the fuzz test) overflows the curve's sampling:
+    a one-line error naming the edge, not shapely's exception on NaN coordinates."""
+    doc = json.loads((PANELS / "circle_skirt.json").read_text())
+    doc["pattern"]["panels"]["skirt_front"]["edges"][1]["curvature"]["params"][0] = 1e169
+    assert "pattern.panels.skirt_front.edges[1]: curve is out of range" in error_of(doc)
 
 
 def test_fewer_than_three_vertices(square_doc):
