@@ -265,7 +265,7 @@ class ContactPipeline:
         self._version = 0  # topology changes (cuts, tears) so far
         self._self: SelfCollider | None = None
         self._self_key = None
-        self._rings = None  # (numbering, each vertex's neighbours, the unique edges) for untangling
+        self._mesh_topology = None  # (numbering, each vertex's neighbours, the unique edges) for untangling
         self._start = None  # (N, 3) where the next step starts after a renumbering (follow), for the self-collider
         self._layer_thickness = None  # (numbering, (N,) body thickness per vertex) of an outfit
         self._untucked = None  # (N,) int: a tucked top's cloth outside its tuck, the garment it keeps its side against
@@ -382,9 +382,9 @@ class ContactPipeline:
         """(each vertex's neighbours across an edge (CSR), the unique edges) of ``model``'s numbering, kept
         while it stands: untangling checks the crossings every frame."""
         key = (model.vertex_count, self._version)
-        if self._rings is None or self._rings[0] != key:
-            self._rings = (key, vertex_rings(model.faces, model.vertex_count), unique_edges(model.faces, model.vertex_count))
-        return self._rings[1:]
+        if self._mesh_topology is None or self._mesh_topology[0] != key:
+            self._mesh_topology = (key, vertex_rings(model.faces, model.vertex_count), unique_edges(model.faces, model.vertex_count))
+        return self._mesh_topology[1:]
 
     def self_collider(self, model, x, body_x=None) -> SelfCollider:
         """The self-collider of ``model``'s numbering, built from positions ``x`` (and, for an

@@ -23,29 +23,32 @@ from numba import njit
 __all__ = ["PatchPairs", "NO_PATCH_PAIRS", "edge_patches", "vertex_triangle_passes", "edge_edge_passes"]
 
 
+@njit(cache=True, inline="always")
+def _shared(ptr, patches, a, b, out, start):
+    """How many patches vertices ``a`` and ``b`` share (their sorted rows merged), written to ``out``
+    from ``start`` unless ``out`` is empty."""
+    k, j = start, ptr[b]
+    for i in range(ptr[a], ptr[a + 1]):
+        while j < ptr[b + 1] and patches[j] < patches[i]:
+            j += 1
+        if j < ptr[b + 1] and patches[j] == patches[i]:
+            if len(out):
+                out[k] = patches[i]
+            k += 1
+    return k - start
+
+
 @njit(cache=True)
 def _edge_patches(edges, ptr, patches):
     """CSR (ptr, patches) per edge of the patches holding both its ends (``ptr``/``patches``: each
-    vertex's patches, sorted)."""
+    vertex's patches, sorted): counted, then written."""
     counts = np.zeros(len(edges) + 1, np.int64)
-    for pass_ in range(2):
-        out = np.empty(counts[-1], np.int64)
-        for e in range(len(edges)):
-            a, b = edges[e, 0], edges[e, 1]
-            k = counts[e] if pass_ else 0
-            j = ptr[b]
-            for i in range(ptr[a], ptr[a + 1]):  # both rows sorted: a merge
-                while j < ptr[b + 1] and patches[j] < patches[i]:
-                    j += 1
-                if j < ptr[b + 1] and patches[j] == patches[i]:
-                    if pass_:
-                        out[k] = patches[i]
-                    k += 1
-            if not pass_:
-                counts[e + 1] = k
-        if not pass_:
-            for e in range(len(edges)):
-                counts[e + 1] += counts[e]
+    none = np.zeros(0, np.int64)
+    for e in range(len(edges)):
+        counts[e + 1] = counts[e] + _shared(ptr, patches, edges[e, 0], edges[e, 1], none, 0)
+    out = np.empty(counts[-1], np.int64)
+    for e in range(len(edges)):
+        _shared(ptr, patches, edges[e, 0], edges[e, 1], out, counts[e])
     return counts, out
 
 

@@ -191,9 +191,10 @@ class _Borders:
     def third(self, i, j):
         """(K,) the third vertex of the face of each edge (i, j), or −1 where it is no border edge."""
         key = _key(i, j, self.n)
-        at = np.minimum(np.searchsorted(self.border, key), max(len(self.border) - 1, 0))
-        hit = (self.border[at] == key) if len(self.border) else np.zeros(len(key), bool)
-        return np.where(hit, self.border_third[at] if len(self.border) else -1, -1)
+        if not len(self.border):
+            return np.full(len(key), -1, np.int64)
+        at = np.minimum(np.searchsorted(self.border, key), len(self.border) - 1)
+        return np.where(self.border[at] == key, self.border_third[at], -1)
 
 
 def _key(i, j, n):
@@ -259,15 +260,13 @@ def _hooks(i, j, t, faces, borders: _Borders):
     (corners k, k + 1) is a border edge passing through a triangle at i or j; column 3, the edge i–j
     is a border edge and an edge of the triangle passes through the border's face (at i and j).
     Crossings are few when this is asked (the local and region moves are stuck): a loop."""
-    n = borders.n
     through = {}  # edge key → the corner sets of the triangles it passes through
-    for a, b, tr in zip(i.tolist(), j.tolist(), t.tolist()):
-        through.setdefault(a * n + b if a < b else b * n + a, []).append(set(faces[tr].tolist()))
+    for key, tr in zip(_key(i, j, borders.n).tolist(), t.tolist()):
+        through.setdefault(key, []).append(set(faces[tr].tolist()))
     out = np.zeros((len(i), 4), bool)
     lone = borders.face_border[t]
-    for r, (a, b, tr) in enumerate(zip(i.tolist(), j.tolist(), t.tolist())):
-        f = faces[tr].tolist()
-        keys = [min(f[k], f[(k + 1) % 3]) * n + max(f[k], f[(k + 1) % 3]) for k in range(3)]
+    sides = np.stack([_key(faces[t, k], faces[t, (k + 1) % 3], borders.n) for k in range(3)], axis=1).tolist()
+    for r, (a, b, keys) in enumerate(zip(i.tolist(), j.tolist(), sides)):
         for k in range(3):
             out[r, k] = lone[r, k] and any(a in c or b in c for c in through.get(keys[k], ()))
         out[r, 3] = any(a in c and b in c for key in keys for c in through.get(key, ()))
