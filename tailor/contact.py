@@ -18,7 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .collide import SELF_COLLISION_MODES, SELF_MARGIN, BodyCollider, Contacts, Layers, SelfCollider, untangle
+from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, Layers, SelfCollider, untangle
 from .collide.cloth import PARTIAL_SHARE
 from .collide.grid import unique_edges
 from .collide.untangle import vertex_rings
@@ -243,15 +243,16 @@ class ContactPipeline:
     friction : float or (N,) per vertex
         Coulomb coefficient of the cloth on the body (and, averaged, on itself).
     self_collision : {"auto", "on", "off"}
-    self_margin : float
-        Query margin of the self-collision broad phase [m].
+    self_margin : float, optional
+        Query margin of the self-collision broad phase [m] (default: the mesh's,
+        :func:`~tailor.collide.cloth.self_margin`).
     panel_layer : (P,) int, optional
         An outfit's garment of each panel, innermost 0: contact between garments keeps their order
         (:class:`~tailor.collide.Layers`). None for a single garment.
     """
 
     def __init__(self, body: BodyCollider | None, motion: BodyMotion | None, *, thickness: float, friction,
-                 self_collision: str = "off", self_margin: float = SELF_MARGIN, panel_layer=None):
+                 self_collision: str = "off", self_margin: float | None = None, panel_layer=None):
         self.body, self.motion, self.thickness = body, motion, float(thickness)
         self.friction = friction
         self.self_mode = check_self_collision(self_collision)

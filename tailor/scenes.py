@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import trimesh
 
-from .collide import SELF_MARGIN, BodyCollider
+from .collide import BodyCollider
 from .contact import ContactPipeline, StaticBody, body_margin, check_self_collision
 from .curves import Curve
 from .fabric import Fabric, preset
@@ -96,7 +96,7 @@ class SceneResult:
 
 def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0, integrator: str = "implicit",
               dt: float | None = None, thickness: float = 0.003, friction: float = 0.4, self_collision: str = "auto",
-              margin: float = SELF_MARGIN, v0=None, guard: Guard | None = None, on_frame=None, hooks=(),
+              margin: float | None = None, v0=None, guard: Guard | None = None, on_frame=None, hooks=(),
               forces=None, wind=None) -> SceneResult:
     """Simulate cloth ``model`` from positions ``x0`` over a static ``body`` = (vertices, faces).
 
@@ -128,7 +128,7 @@ def run_scene(model, x0, *, body=None, duration: float = 1.0, fps: float = 25.0,
     return SceneResult(frames, model, report)
 
 
-def scene_contacts(model, x0, body, *, thickness: float, friction: float, self_collision: str, margin: float) -> ContactPipeline:
+def scene_contacts(model, x0, body, *, thickness: float, friction: float, self_collision: str, margin: float | None) -> ContactPipeline:
     """The contact pipeline of cloth ``model`` at ``x0`` over a static ``body`` = (vertices, faces) or None."""
     collider, motion = None, None
     if body is not None:

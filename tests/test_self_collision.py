@@ -391,6 +391,32 @@ def test_a_narrower_margin_asks_about_fewer_pairs_and_finds_the_same_contacts():
     np.testing.assert_allclose(x_narrow, x_wide, atol=1e-9)
 
 
+def test_the_default_margin_follows_the_mesh_so_a_finer_mesh_asks_about_as_many_pairs_a_vertex():
+    """The default query margin is 0.65 mean edge lengths up to 1 cm: a 2 cm mesh keeps the full
+    centimetre; at 5 mm the margin shrinks with the edges, so a vertex of a panel falling onto
+    another meets a few candidates more than on the coarse mesh (the thickness does not shrink)
+    where the full centimetre would give it twenty times as many, and the falling panel is caught
+    either way."""
+    from tailor.collide import SELF_MARGIN
+
+    def falling(resolution, margin=None):
+        model, x0 = stacked(0.003, 0.0, offset=0.0, size=0.1, resolution=resolution)
+        v0 = np.zeros_like(x0)
+        v0[panel_vertices(model, 1), 2] = -0.5
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.001, margin=margin, mode="on")
+        contacts = collider.respond(1.0 / np.asarray(model.vertex_mass), model.state(x0.copy(), v0), 0.01)
+        edges = np.unique(np.sort(model.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+        mean_edge = np.linalg.norm(x0[edges[:, 0]] - x0[edges[:, 1]], axis=1).mean()
+        return collider.margin, mean_edge, collider.candidate_pairs / model.vertex_count, contacts
+
+    coarse_margin, _, coarse, caught = falling(0.02)
+    assert coarse_margin == SELF_MARGIN and caught > 0
+    fine_margin, edge, fine, caught = falling(0.005)
+    assert fine_margin == pytest.approx(0.65 * edge) and caught > 0
+    wide = falling(0.005, SELF_MARGIN)[2]
+    assert fine < 3.0 * coarse and fine < 0.2 * wide
+
+
 def test_flat_layers_lying_on_each_other_are_candidates_of_each_other_not_of_themselves():
     """Two flat panels 5 mm apart: ``auto`` asks only about pairs joining the two (a flat patch cannot
     touch itself or its flat neighbours: the normal-cone test, pair by pair), ``on`` about pairs

@@ -18,12 +18,12 @@ a margin and reuse the candidates while nothing has moved further than it.
 
 from .body import BodyCollider, body_gap
 from .broad import TriangleBoxes, bvh_object, clustered_query, sphere_query
-from .cloth import SELF_COLLISION_MODES, SELF_MARGIN, Layers, SelfCollider
+from .cloth import SELF_COLLISION_MODES, SELF_MARGIN, Layers, SelfCollider, self_margin
 from .contacts import NO_CONTACTS, Contacts
 from .crossings import edge_crossings
 from .inside import InsideTest, points_inside
 from .intersect import self_intersections
 from .untangle import untangle
 
-__all__ = ["BodyCollider", "body_gap", "SelfCollider", "Layers", "SELF_COLLISION_MODES", "SELF_MARGIN", "bvh_object", "points_inside", "InsideTest",
+__all__ = ["BodyCollider", "body_gap", "SelfCollider", "Layers", "SELF_COLLISION_MODES", "SELF_MARGIN", "self_margin", "bvh_object", "points_inside", "InsideTest",
            "self_intersections", "edge_crossings", "untangle", "sphere_query", "clustered_query", "TriangleBoxes", "Contacts", "NO_CONTACTS"]

@@ -16,10 +16,7 @@ threshold distance from the cloth's vertices") runs in three stages:
    object each). Each vertex is anchored where it was last queried; a pair stays valid while
    neither end moves ``margin / 2`` from its anchor (two points then approach by less than
    ``margin``). A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices
-   that have (the others' anchors are their boxes), unless most have. Swept boxes are tight
-   for cloth falling or swinging as a whole, where one radius for every pair (``margin`` plus
-   twice the step's largest displacement relative to the centroid) grows with the fastest part
-   of the cloth and pairs everything with everything (docs/measurements.md has the numbers).
+   that have (the others' anchors are their boxes), unless most have.
 3. **Narrow phase** (compiled): a vertex whose projection falls on a candidate triangle not at the
    vertex is a contact if it is nearer than ``thickness``, if its velocity would bring it nearer
    within the next step, or if it crossed the triangle's plane since the last step (judged by the
@@ -61,9 +58,10 @@ from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_
 from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
+from .margins import SELF_MARGIN, self_margin
 from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
 
-__all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers"]
+__all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers", "self_margin"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
 GRID_EDGES = 2.0
@@ -78,13 +76,6 @@ every candidate is found again; fewer, only the pairs touching them."""
 
 REANCHOR = 0.5
 """A partial query also anchors again the vertices this far through their ``margin / 2``."""
-
-SELF_MARGIN = 0.01
-"""[m] Default query margin: candidates are the pairs within the thickness plus this anywhere on the
-step's motion, kept while no vertex moves half of it. Every pair that comes within the thickness
-is found at any margin, but the margin also sets how deep a pair that crossed is still recognised
-as one: narrower margins, though cheaper on a walking garment, let some drapes cross or tear
-(docs/measurements.md, ninth day)."""
 
 MAX_RELATIVE_SPEED = 20.0
 """[m/s] No part of a garment moves this fast relative to the rest of it (sewing and walking drapes
@@ -110,8 +101,9 @@ class SelfCollider:
         Positions the patches are cut from [m].
     thickness : float
         Distance kept between the cloth and itself [m].
-    margin : float
-        Extra query radius [m]; candidates live until a vertex moves ``margin / 2``.
+    margin : float, optional
+        Extra query radius [m]; candidates live until a vertex moves ``margin / 2`` (default:
+        :func:`self_margin` of the mesh's mean edge length at ``x``).
     mode : {"auto", "on"}
         ``auto`` checks only regions that can touch; ``on`` checks every vertex.
     patch : float, optional
@@ -133,7 +125,7 @@ class SelfCollider:
         skirt's band closing over trousers'), and ``layers`` judges pairs between garments by it.
     """
 
-    def __init__(self, faces, face_group, x, *, thickness: float, margin: float = SELF_MARGIN, mode: str = "auto",
+    def __init__(self, faces, face_group, x, *, thickness: float, margin: float | None = None, mode: str = "auto",
                  patch: float | None = None, friction: float = 0.4, edges: bool = True, layers: Layers | None = None,
                  partial: float = 0.0, garment=None):
         if mode not in ("auto", "on"):
@@ -141,7 +133,6 @@ class SelfCollider:
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.n = len(x)
         self.thickness = float(thickness)
-        self.margin = float(margin)
         self.friction = float(friction)
         self.edges = bool(edges)
         self.mode = mode
@@ -158,9 +149,11 @@ class SelfCollider:
         self._edges = np.column_stack([keys // max(self.n, 1), keys % max(self.n, 1)])
         self._face_edges = face_edge.reshape(-1, 3).astype(np.int64)
         length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
-        self._grid_cell = GRID_EDGES * float(np.mean(length)) if len(length) else 1.0
+        mean_edge = float(np.mean(length)) if len(length) else 0.0
+        self.margin = self_margin(mean_edge) if margin is None else float(margin)
+        self._grid_cell = GRID_EDGES * mean_edge if len(length) else 1.0
         if patch is None:
-            patch = max(PATCH_MIN, PATCH_EDGES * float(np.mean(length))) if len(length) else 0.1
+            patch = max(PATCH_MIN, PATCH_EDGES * mean_edge) if len(length) else 0.1
         self.regions = Regions(self.faces, np.asarray(face_group), np.asarray(x, float), patch)
         self._edge_patches = self.regions.edge_patches(self._edges)  # each edge's patches, for the searches' filter
         self._ee = np.zeros((0, 4), np.int64)
