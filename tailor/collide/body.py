@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import math
+from functools import partial
+from itertools import chain
+
 import numpy as np
 
 from ..errors import SimulationUnstable
@@ -427,13 +431,14 @@ def body_gap(x, body_x, body_faces):
     dist, tri, bary, normal = np.full(n, np.inf), np.full(n, -1, np.int64), np.zeros((n, 3)), np.zeros((n, 3))
     if not n:
         return dist, normal
-    bound = cKDTree(body_x).query(x)[0]
-    corners = body_x[faces]
-    centre = corners.mean(axis=1)
-    reach = float(np.sqrt(((corners - centre[:, None]) ** 2).sum(axis=2)).max())
-    lists = cKDTree(centre).query_ball_point(x, bound * (1.0 + 1e-9) + reach + 1e-12, return_sorted=True)
-    count = np.fromiter((len(c) for c in lists), np.int64, n)
+    tree = partial(cKDTree, balanced_tree=False, compact_nodes=False)  # built for one query: the quicker build
+    bound = tree(body_x).query(x)[0]
+    a, b, c = body_x[faces[:, 0]], body_x[faces[:, 1]], body_x[faces[:, 2]]
+    centre = (a + b + c) / 3.0
+    reach = math.sqrt(max(float(np.einsum("ij,ij->i", p - centre, p - centre).max()) for p in (a, b, c)))
+    lists = tree(centre).query_ball_point(x, bound * (1.0 + 1e-9) + reach + 1e-12, return_sorted=True)
+    count = np.fromiter(map(len, lists), np.int64, n)
     hi = np.cumsum(count)
-    candidates = np.fromiter((t for c in lists for t in c), np.int64, int(hi[-1]))
+    candidates = np.fromiter(chain.from_iterable(lists), np.int64, int(hi[-1]))
     nearest_into(x, hi - count, hi, candidates, body_x, faces, dist, tri, bary, normal, np.arange(n, dtype=np.int64))
     return dist, normal
