@@ -11,9 +11,9 @@ threshold distance from the cloth's vertices") runs in three stages:
 2. **Broad phase**: the active triangles that come within ``thickness + margin`` of an active
    vertex anywhere on the step's straight-line motion, and the active edges that come that near
    one another, found between boxes swept from each vertex's place at the last step to its place
-   now (relative to the cloth's centroid), over a compiled uniform grid rebuilt each query
-   (:mod:`tailor.collide.grid`: python-fcl can neither refit nor hand back pairs without a Python
-   object each). Each vertex is anchored where it was last queried; a pair stays valid while
+   now (relative to the cloth's centroid; a long step in parts, :mod:`.sweep`), over a compiled
+   uniform grid rebuilt each query (:mod:`.grid`: python-fcl can neither refit nor hand back pairs
+   without a Python object each). Each vertex is anchored where it was last queried; a pair stays valid while
    neither end moves ``margin / 2`` from its anchor (two points then approach by less than
    ``margin``). A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices
    that have (the others' anchors are their boxes), unless most have.
@@ -59,6 +59,7 @@ from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
 from .margins import SELF_MARGIN, self_margin
+from .sweep import part_boxes, sweep_parts, union_edge_edge, union_vertex_triangle
 from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers", "self_margin"]
@@ -149,7 +150,7 @@ class SelfCollider:
         self._edges = np.column_stack([keys // max(self.n, 1), keys % max(self.n, 1)])
         self._face_edges = face_edge.reshape(-1, 3).astype(np.int64)
         length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
-        mean_edge = float(np.mean(length)) if len(length) else 0.0
+        mean_edge = self._mean_edge = float(np.mean(length)) if len(length) else 0.0
         self.margin = self_margin(mean_edge) if margin is None else float(margin)
         self._grid_cell = GRID_EDGES * mean_edge if len(length) else 1.0
         if patch is None:
@@ -229,7 +230,9 @@ class SelfCollider:
             self._anchor = rx.copy()
             self.stats["queries"] += 1
         self._pairs = pairs
-        self._find(rx, lo, hi, faces, dirty, exact=rxp is None)
+        parts = 1 if moving is not None or rxp is None else sweep_parts(step, self._mean_edge)
+        boxes = [(lo, hi)] if parts == 1 else list(part_boxes(rxp, rx, parts))
+        self._find(rx, boxes, faces, dirty, exact=rxp is None)
         self.stats["query_s"] += time.perf_counter() - t0
 
     def _patch_pairs(self):
@@ -257,22 +260,23 @@ class SelfCollider:
                         | self._is_kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1))
         return keep_vt, keep_ee
 
-    def _find(self, x, lo, hi, faces, dirty, *, exact):
-        """The candidates among ``faces`` and their vertices: all of them, or (``dirty`` (N,) bool) the
-        pairs touching a dirty vertex added to the kept ones that touch none."""
+    def _find(self, x, boxes, faces, dirty, *, exact):
+        """The candidates among ``faces`` and their vertices (boxes (lo, hi) round each vertex over the
+        step, or each part of it: :mod:`.sweep`): all of them, or (``dirty`` (N,) bool, the step whole)
+        the pairs touching a dirty vertex added to the kept ones that touch none."""
         verts = present(self.faces[faces].ravel(), self.n)
         radius = self.thickness + self.margin
-        # a vertex's own neighbourhood: triangles touching it or its 1-ring (no fold is that tight)
-        # a triangle at the vertex is never a contact; one touching its 1-ring is only once crossed
+        # a triangle at the vertex is never a contact; one touching its 1-ring only once crossed
         # (ignoring those, a strip crumpling over one or two triangles passed through itself)
         patch_pairs = self._patch_pairs()
-        find = partial(vertex_triangle_pairs, faces=self.faces, lo=lo, hi=hi, x=x, radius=radius, cell=self._grid_cell,
+        find = partial(vertex_triangle_pairs, faces=self.faces, x=x, radius=radius, cell=self._grid_cell,
                        ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs)
         edge_ids = present(self._face_edges[faces].ravel(), len(self._edges))
         if dirty is None:
-            vertex, tri, near = find(verts, faces)
-            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, None, patch_pairs)
+            (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs)
         else:
+            (lo, hi), = boxes
+            find = partial(find, lo=lo, hi=hi)
             dirty_face = touching(self.faces[faces], dirty)
             moved = dirty[verts]
             parts = (find(verts[moved], faces), find(verts[~moved], faces[dirty_face]))
@@ -293,6 +297,12 @@ class SelfCollider:
         self._ee, self._ee_near, self._ee_toward = ee, ee_near, self._edge_directions(x, ee)
         self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
+
+    def _search(self, find, verts, faces, edge_ids, boxes, patch_pairs):
+        """((vertex, triangle, near), (edge pairs, near)) of every pair whose boxes meet in one of ``boxes``."""
+        found = [(find(verts, faces, lo=lo, hi=hi), self._edge_pairs(edge_ids, lo, hi, None, patch_pairs)) for lo, hi in boxes]
+        return found[0] if len(found) == 1 else (union_vertex_triangle([f[0] for f in found], len(self.faces)),
+                                                 union_edge_edge([f[1] for f in found], self._edges, max(self.n, 1)))
 
     def _edge_pairs(self, ids, lo, hi, dirty, patch_pairs):
         if not self.edges:
