@@ -192,6 +192,15 @@ class ImplicitEuler(IntegratorBase):
         pinv = inverse_3x3(pattern.diagonal_blocks(blocks))
         return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free, rhs0)
 
+    @staticmethod
+    def _first_guess(model, system: _System, dt, f):
+        """Δv to start the first solve of a model from: the explicit Euler estimate Δt·f/m, or zero
+        where that leaves the larger residual (a stiff state: a sewn garment's tension)."""
+        dv = dt * f / np.repeat(model.vertex_mass, 3) * system.free
+        r = np.empty((model.vertex_count, 3))
+        bsr_rows(system.bptr, system.bcol, system.blocks, dv, np.arange(model.vertex_count), r)
+        return dv if np.linalg.norm(system.rhs - r.reshape(-1)) < np.linalg.norm(system.rhs) else np.zeros_like(dv)
+
     def _solve(self, system: _System, dv, v, held: _Held):
         """CG on A·Δv = rhs in place, holding the contacts' velocities; (iterations, converged)."""
         ids, n = held.ids, held.normals
@@ -314,7 +323,7 @@ class ImplicitEuler(IntegratorBase):
         if self._warm is not None and len(self._warm) == 3 * n:
             dv = self._warm.copy()
         else:
-            dv = dt * f / np.repeat(model.vertex_mass, 3) * system.free
+            dv = self._first_guess(model, system, dt, f)
         held = _Held.given(contacts, model)
         iterations, converged = self._solve(system, dv, state.v.reshape(-1), held)
         settled = True
