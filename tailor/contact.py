@@ -245,7 +245,7 @@ class ContactPipeline:
     self_collision : {"auto", "on", "off"}
     self_margin : float, optional
         Query margin of the self-collision broad phase [m] (default: the mesh's,
-        :func:`~tailor.collide.cloth.self_margin`).
+        :func:`~tailor.collide.margins.self_margin`).
     panel_layer : (P,) int, optional
         An outfit's garment of each panel, innermost 0: contact between garments keeps their order
         (:class:`~tailor.collide.Layers`). None for a single garment.

@@ -18,7 +18,8 @@ a margin and reuse the candidates while nothing has moved further than it.
 
 from .body import BodyCollider, body_gap
 from .broad import TriangleBoxes, bvh_object, clustered_query, sphere_query
-from .cloth import SELF_COLLISION_MODES, SELF_MARGIN, Layers, SelfCollider, self_margin
+from .cloth import SELF_COLLISION_MODES, Layers, SelfCollider
+from .margins import SELF_MARGIN, self_margin
 from .contacts import NO_CONTACTS, Contacts
 from .crossings import edge_crossings
 from .inside import InsideTest, points_inside

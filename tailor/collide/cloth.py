@@ -58,11 +58,11 @@ from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_
 from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
-from .margins import SELF_MARGIN, self_margin
+from .margins import self_margin
 from .sweep import part_boxes, sweep_parts, union_edge_edge, union_vertex_triangle
 from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
 
-__all__ = ["SelfCollider", "SELF_COLLISION_MODES", "SELF_MARGIN", "Layers", "self_margin"]
+__all__ = ["SelfCollider", "SELF_COLLISION_MODES", "Layers"]
 
 SELF_COLLISION_MODES = ("auto", "on", "off")
 GRID_EDGES = 2.0
