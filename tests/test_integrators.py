@@ -219,3 +219,62 @@ def test_the_first_solve_starts_from_the_explicit_estimate_or_from_rest_whicheve
     assert chosen.iterations < explicit.iterations
     gap = np.abs(chosen.state.v - explicit.state.v).max()
     assert gap < 0.01 * np.abs(explicit.state.v).max()  # the same step, to the solver's tolerance
+
+
+def test_garments_not_sewn_together_are_solved_each_to_its_own_tolerance():
+    """Two sheets in one model (an outfit's garments): the implicit matrix has two independent parts
+    and each is solved alone, so the light sheet steps exactly as it would alone. One CG over both
+    judged the light sheet's residual against the tense one's right-hand side and stopped early."""
+    from conftest import doc_with, rect_panel
+    from tailor.fabric import preset
+    from tailor.forces.jacobian import SparsePattern
+    from tailor.io import pattern_from_dict
+    from tailor.mesh import discretise
+    from tailor.model import build_model
+
+    def model_of(panels):
+        return build_model(discretise(pattern_from_dict(doc_with(panels)), 0.02), preset("denim"))
+
+    both, alone = model_of({"a": rect_panel(40, 40), "b": rect_panel(30, 40)}), model_of({"b": rect_panel(30, 40)})
+    k = both.vertex_count - alone.vertex_count
+    assert [(p.lo, p.hi) for p in SparsePattern(both).parts] == [(0, k), (k, both.vertex_count)]
+    rng = np.random.default_rng(1)
+    flat = np.c_[both.rest_uv, np.zeros(both.vertex_count)]
+    x = np.concatenate([flat[:k] * 1.03 + rng.normal(0, 0.002, (k, 3)),  # the tense sheet
+                        flat[k:] + [0.0, 0.0, 0.5] + rng.normal(0, 1e-4, (alone.vertex_count, 3))])  # the light one
+    v = np.concatenate([np.zeros((k, 3)), rng.normal(0, 0.01, (alone.vertex_count, 3))])
+    got = ImplicitEuler(tolerance=1e-2).step(both, both.state(x, v), 0.02, total_forces).state
+    own = ImplicitEuler(tolerance=1e-2).step(alone, alone.state(x[k:], v[k:]), 0.02, total_forces).state
+    assert np.allclose(got.v[k:], own.v, rtol=0.0, atol=1e-12)  # the forces' sums differ in the last bit
+
+    class Joint(ImplicitEuler):  # one CG over the whole matrix, as before
+        def _solve(self, system, dv, v, held):
+            system.parts = system.parts[:0]
+            return super()._solve(system, dv, v, held)
+
+    joint = Joint(tolerance=1e-2).step(both, both.state(x, v), 0.02, total_forces).state
+    exact = ImplicitEuler(tolerance=1e-10).step(alone, alone.state(x[k:], v[k:]), 0.02, total_forces).state
+    assert np.linalg.norm(joint.v[k:] - exact.v) > 4 * np.linalg.norm(own.v - exact.v)  # 8.5× here
+
+
+def test_block_parts_cut_only_where_no_block_crosses():
+    """Runs of coupled vertices: 0–299, 300–309 and 310–699 each a chain; interleaved pairs (i, i + 2)
+    cannot be cut anywhere. A run shorter than MIN_PART_VERTICES joins the part before it."""
+    from tailor.forces.jacobian import MIN_PART_VERTICES, block_parts
+
+    def csr(n, pairs):
+        rows = [{i} for i in range(n)]
+        for a, b in pairs:
+            rows[a].add(b)
+            rows[b].add(a)
+        bcol = np.concatenate([sorted(r) for r in rows]).astype(np.int32)
+        return np.concatenate([[0], np.cumsum([len(r) for r in rows])]).astype(np.int32), bcol
+
+    chains = [(i, i + 1) for i in range(699) if i + 1 not in (300, 310)]
+    assert MIN_PART_VERTICES > 10
+    parts = block_parts(*csr(700, chains))
+    assert [(p.lo, p.hi) for p in parts] == [(0, 300), (300, 700)]
+    bptr, bcol = csr(700, chains)
+    second = parts[1]
+    assert np.array_equal(second.bcol, bcol[bptr[300]:] - 300) and second.bptr[-1] == len(second.bcol)
+    assert [(p.lo, p.hi) for p in block_parts(*csr(700, [(i, i + 2) for i in range(698)]))] == [(0, 700)]

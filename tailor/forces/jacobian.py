@@ -17,6 +17,7 @@ kernels over element colour classes); :func:`force_jacobians` gives K and C as C
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -27,7 +28,11 @@ from .kawabata import secant_hinge_stiffness, secant_membrane_stiffness
 from .kernels import bending_jacobian_into, bending_system_into, element_colors, membrane_jacobian_into, membrane_system_into
 from .membrane import membrane_gradients
 
-__all__ = ["SparsePattern", "force_jacobians", "jacobian_data", "jacobian_blocks", "implicit_blocks"]
+__all__ = ["SparsePattern", "BlockPart", "force_jacobians", "jacobian_data", "jacobian_blocks", "implicit_blocks",
+           "MIN_PART_VERTICES"]
+
+MIN_PART_VERTICES = 256
+"""Fewest vertices a :class:`BlockPart` is solved alone with; smaller runs join a neighbour's part."""
 
 
 def _block_keys(groups, nv: int) -> np.ndarray:
@@ -40,6 +45,38 @@ def _block_keys(groups, nv: int) -> np.ndarray:
         pair = np.unique((np.minimum(g[:, a], g[:, b]) * nv + np.maximum(g[:, a], g[:, b])).reshape(-1))
         parts += [pair, (pair % nv) * nv + pair // nv]
     return np.unique(np.concatenate(parts))
+
+
+@dataclass(frozen=True, slots=True)
+class BlockPart:
+    """Vertices ``lo:hi`` of a block-CSR matrix coupled to no vertex outside them: the rows' own
+    block pointers (``bptr``, from 0) and columns (``bcol``, from ``lo``) over blocks ``first:last``."""
+
+    lo: int
+    hi: int
+    bptr: np.ndarray
+    bcol: np.ndarray
+    first: int
+    last: int
+
+
+def block_parts(bptr, bcol, min_vertices: int = MIN_PART_VERTICES) -> list[BlockPart]:
+    """The independent diagonal parts of a structurally symmetric block-CSR matrix: cut before every
+    vertex ``i`` that no block of a row before it reaches (the column a row reaches farthest, its
+    running maximum, is below ``i``), each part at least ``min_vertices`` long (the last joins the
+    one before if shorter). An outfit's garments are one part each; a garment is one part."""
+    nv = len(bptr) - 1
+    if nv == 0:
+        return []
+    reach = np.maximum.accumulate(np.maximum.reduceat(bcol, bptr[:-1]) if len(bcol) else np.arange(nv))
+    cuts, lo = [], 0
+    for i in np.flatnonzero(reach[:-1] < np.arange(1, nv)) + 1:
+        if i - lo >= min_vertices and nv - i >= min_vertices:
+            cuts.append(int(i))
+            lo = int(i)
+    edges = [0, *cuts, nv]
+    return [BlockPart(a, b, (bptr[a:b + 1] - bptr[a]).astype(bptr.dtype), (bcol[bptr[a]:bptr[b]] - a).astype(bcol.dtype),
+                      int(bptr[a]), int(bptr[b])) for a, b in zip(edges[:-1], edges[1:])]
 
 
 class SparsePattern:
@@ -74,6 +111,12 @@ class SparsePattern:
         vertex pairs, (E, k, k) (32-bit where they fit: the largest array of the pattern)."""
         self._groups = groups
         self._colors = [None] * len(groups)
+
+    @cached_property
+    def parts(self) -> list[BlockPart]:
+        """The matrix's independent diagonal parts (:func:`block_parts`): garments not sewn together
+        (an outfit's), each solved on its own (made on first use)."""
+        return block_parts(self.block_indptr, self.block_cols)
 
     @cached_property
     def _block_slots(self) -> np.ndarray:

@@ -15,7 +15,7 @@ import numpy as np
 from ..collide.contacts import Contacts
 from ..errors import SimulationUnstable
 from ..forces.external import air_damping
-from ..forces.jacobian import SparsePattern, implicit_blocks
+from ..forces.jacobian import BlockPart, SparsePattern, implicit_blocks
 from ..forces.membrane import face_stretch
 from ..model import State
 from .base import IntegratorBase, SolverSettings, StepResult
@@ -82,6 +82,7 @@ class _System:
     rhs: np.ndarray
     free: np.ndarray  # (3N,) dofs not pinned
     rhs0: np.ndarray  # the right-hand side as assembled: before pinned rows were cleared and friction added
+    parts: list  # the matrix's independent parts (BlockPart), each solved alone
 
     def reactions(self, dv, held: _Held):
         """(K, 3) impulse [N·s] the held contacts exert: the residual A·Δv − b at their dofs."""
@@ -190,19 +191,29 @@ class ImplicitEuler(IntegratorBase):
             drag[model.vertex_pinned] = 0.0
             pattern.add_to_diagonal(blocks, dt * drag)
         pinv = inverse_3x3(pattern.diagonal_blocks(blocks))
-        return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free, rhs0)
+        return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free, rhs0, pattern.parts)
 
     @staticmethod
     def _first_guess(model, system: _System, dt, f):
         """Δv to start the first solve of a model from: the explicit Euler estimate Δt·f/m, or zero
-        where that leaves the larger residual (a stiff state: a sewn garment's tension)."""
+        where that leaves the larger residual (a stiff state: a sewn garment's tension), chosen for
+        each independent part (an outfit's garments: one sewn and tense, one falling)."""
         dv = dt * f / np.repeat(model.vertex_mass, 3) * system.free
         r = np.empty((model.vertex_count, 3))
         bsr_rows(system.bptr, system.bcol, system.blocks, dv, np.arange(model.vertex_count), r)
-        return dv if np.linalg.norm(system.rhs - r.reshape(-1)) < np.linalg.norm(system.rhs) else np.zeros_like(dv)
+        starts = np.array([3 * p.lo for p in system.parts], np.intp)
+        worse = np.add.reduceat((system.rhs - r.reshape(-1)) ** 2, starts) >= np.add.reduceat(system.rhs ** 2, starts)
+        for part in np.flatnonzero(worse):
+            dv[3 * system.parts[part].lo:3 * system.parts[part].hi] = 0.0
+        return dv
 
     def _solve(self, system: _System, dv, v, held: _Held):
-        """CG on A·Δv = rhs in place, holding the contacts' velocities; (iterations, converged)."""
+        """CG on A·Δv = rhs in place, holding the contacts' velocities; (iterations, converged).
+
+        Each independent part of the matrix (:attr:`SparsePattern.parts`: an outfit's garments) is
+        solved alone to the tolerance of its own right-hand side: one CG over all of them would
+        iterate every part as long as the slowest, and judge a light garment's residual against a
+        tense one's. The iterations are the most any part took."""
         ids, n = held.ids, held.normals
         if len(ids):
             dvk = dv.reshape(-1, 3)[ids]
@@ -210,8 +221,22 @@ class ImplicitEuler(IntegratorBase):
             normal_fix = np.einsum("ij,ij->i", held.target - end, n)[:, None] * n
             dvk += np.where(held.stick[:, None] > 0, held.target - end, normal_fix)
             dv.reshape(-1, 3)[ids] = dvk
-        return block_pcg(system.bptr, system.bcol, system.blocks, system.rhs, dv, system.pinv, self.settings.tolerance,
-                         self.max_iterations, ids, n, held.stick)
+        if len(system.parts) < 2:
+            return block_pcg(system.bptr, system.bcol, system.blocks, system.rhs, dv, system.pinv, self.settings.tolerance,
+                             self.max_iterations, ids, n, held.stick)
+        iterations, converged = 0, True
+        for part in system.parts:
+            its, ok = self._solve_part(system, part, dv, held)
+            iterations, converged = max(iterations, its), converged and ok
+        return iterations, converged
+
+    def _solve_part(self, system: _System, part: BlockPart, dv, held: _Held):
+        """:meth:`_solve` on one independent part, on views of the system's arrays."""
+        lo, hi = part.lo, part.hi
+        mine = (held.ids >= lo) & (held.ids < hi)
+        return block_pcg(part.bptr, part.bcol, system.blocks[part.first:part.last], system.rhs[3 * lo:3 * hi],
+                         dv[3 * lo:3 * hi], system.pinv[lo:hi], self.settings.tolerance, self.max_iterations,
+                         held.ids[mine] - lo, np.ascontiguousarray(held.normals[mine]), held.stick[mine])
 
     def _release_pulled(self, system, dv, held, let_go):
         """Let go the held contacts the body would have to pull on (the cloth leaves the body there).
