@@ -14,12 +14,13 @@ import numpy as np
 
 from ..contact import Attachments
 from ..forces import total_forces
+from ..forces.membrane import face_stretch
 from ..model import AIR_DENSITY, build_model
 from ..outfit import garment_of_vertex
 from ..seams import Sewing, merge_state
 from ..tearing import TearableCloth
 from ..units import GRAVITY
-from .options import ANCHORED_NEAR, COMPRESSION, NEAR_RATE, NEAR_SEAM
+from .options import ANCHORED_NEAR, COMPRESSION, FREEZE_RINGS, FREEZE_STRETCH, NEAR_RATE, NEAR_SEAM
 
 __all__ = ["Garment", "Stage", "attachment_vertices"]
 
@@ -79,6 +80,7 @@ class Garment:
         self.waiting = np.zeros(0, np.intp)  # mesh vertices of an outfit's garments not sewing yet: out of the model
         self._parked = np.zeros((0, 3))  # positions of the waiting garments' simulated vertices (the last of the numbering)
         self.gathered = np.zeros(0, np.intp)  # mesh vertices tucked under a band while it sews, carried by a Gather
+        self.frozen = np.zeros(0, np.intp)  # mesh vertices of sewn inner garments held still while an outer one sews
         self._tuck = None  # (mesh vertices tucked, the garment tucking them) once a band closed over them
         self.gravity = False
         self.rebuilds = 0
@@ -123,7 +125,7 @@ class Garment:
         xw, vw = merge_state(x_orig, v_orig, self.mass, new)
         m = build_model(self.mesh, self.fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
                         gravity=(0.0, 0.0, -GRAVITY if self.gravity else 0.0))
-        held = np.union1d(self.pins, self.gathered)
+        held = np.union1d(np.union1d(self.pins, self.gathered), self.frozen)
         if len(held):
             m = m.with_pins(np.unique(new[held]))
         if self.sewing.open_count:
@@ -206,10 +208,34 @@ class Garment:
     def sew_stage(self, state, stage: Stage):
         """Begin a sewing ``stage`` of :meth:`stage_plan`: only its pairs pull and merge, the garments
         outside wait where they were placed, out of the model (their forces, solve and contacts cost
-        nothing until they sew). Returns the state of the rebuilt model."""
+        nothing until they sew), and those inside, sewn, are held still (:meth:`_frozen_under`).
+        Returns the state of the rebuilt model."""
         self.sewing.sew_only(stage.sewing)
         self.waiting = stage.waiting
-        return self.rebuild(state)
+        self.frozen = self._frozen_under(stage.garment, state.x)
+        state = self.rebuild(state)
+        state.v[np.unique(self.weld[self.frozen])] = 0.0
+        return state
+
+    def _frozen_under(self, garment: int, x) -> np.ndarray:
+        """Mesh vertices of the sewn garments inside ``garment`` held still while it sews (CLO's
+        "freeze"): their forces then cost no solve and they never move for their contacts, where
+        otherwise their own tension draws them into the body each step (sewing holds no body contact)
+        and the response pushes them out. Not if ``garment`` is held to the body (a band closing over
+        an inner band: the inner one must give way) or tucks them in; and not round the triangles
+        their sewing left stretched beyond :data:`~.options.FREEZE_STRETCH` (a sleeve caught round
+        the arm), :data:`~.options.FREEZE_RINGS` rings wide, which keep relaxing."""
+        if not self.pattern.pieces or garment == 0:
+            return np.zeros(0, np.intp)
+        if self.pattern.pieces[garment].tucks or np.intersect1d(self.attached, self.garment_vertices(garment)).size:
+            return np.zeros(0, np.intp)
+        faces = np.asarray(self.model.faces)
+        loose = np.zeros(self.model.vertex_count, bool)
+        loose[faces[face_stretch(self.model, x) > FREEZE_STRETCH].ravel()] = True
+        for _ in range(FREEZE_RINGS):
+            loose[faces[loose[faces].any(axis=1)].ravel()] = True
+        inner = np.flatnonzero(garment_of_vertex(self.pattern, self.mesh.vertex_panel) < garment)
+        return inner[~loose[self.weld[inner]]]
 
     def garment_vertices(self, k: int) -> np.ndarray:
         """Mesh vertices of the outfit's garment ``k`` (every vertex for a single garment)."""
@@ -249,6 +275,7 @@ class Garment:
         ids = self.attached
         self.gravity = True
         self.waiting = np.zeros(0, np.intp)  # every garment sewn
+        self.frozen = np.zeros(0, np.intp)  # and free
         self.gathered = np.zeros(0, np.intp)  # a tucked garment's gathered cloth is free again, under the band
         if len(ids):
             dist, tri, bary, _ = collider.nearest(state.x[self.weld[ids]], pose, 0, cache=False)

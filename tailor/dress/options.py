@@ -20,7 +20,7 @@ from ..tearing import Cut
 
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
-           "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
+           "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "FREEZE_STRETCH", "FREEZE_RINGS", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
            "TUCK_BELOW", "TUCK_GATHER_TIME", "TUCK_ROW"]
 
 DRAPE_RESOLUTION = 0.02
@@ -88,6 +88,13 @@ seconds (sliding over the shoulders)."""
 
 REST_FRAMES = 2
 """See ``REST_SPEED``."""
+
+FREEZE_STRETCH = 1.3
+"""An outfit's sewn inner garments are held still while an outer one sews, except round their
+triangles stretched beyond this (principal stretch; :meth:`~tailor.dress.garment.Garment.sew_stage`)."""
+
+FREEZE_RINGS = 2
+"""Rings of triangles round those left free with them."""
 
 WELD_BATCH = 0.2
 """Merged seam pairs are welded (the garment's model rebuilt: the model, the self-collider and a
