@@ -22,6 +22,7 @@ from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, Layers, SelfC
 from .collide.cloth import PARTIAL_SHARE
 from .collide.grid import unique_edges
 from .collide.untangle import vertex_rings
+from .constraints import Attachments, Gather, HeightHold, LimbWallContact
 from .errors import SimulationError
 
 __all__ = ["ContactPipeline", "ContactLoads", "ContactSettings", "StaticBody", "Attachments", "HeightHold", "LimbWallContact", "BODY_MARGIN",
@@ -86,112 +87,6 @@ class StaticBody:
         return self.x, self.v, 0
 
 
-class Attachments:
-    """Vertices held to body points (Eq. 19–20): barycentric on a body triangle, offset along its normal."""
-
-    def __init__(self, ids, tri, bary, offset, faces):
-        self.ids, self.tri, self.bary, self.offset, self.faces = ids, tri, bary, offset, faces
-
-    def apply(self, state, body_x, body_v) -> None:
-        f = self.faces[self.tri]
-        p = (body_x[f] * self.bary[:, :, None]).sum(axis=1)
-        a, b, c = body_x[f[:, 0]], body_x[f[:, 1]], body_x[f[:, 2]]
-        n = np.cross(b - a, c - a)
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        state.x[self.ids] = p + self.offset[:, None] * n
-        state.v[self.ids] = (body_v[f] * self.bary[:, :, None]).sum(axis=1)
-
-    def renumbered(self, inverse) -> "Attachments":
-        """The same attachments after a renumbering (``inverse``: old vertex → new, −1 gone)."""
-        ids = inverse[self.ids]
-        ok = ids >= 0
-        return Attachments(ids[ok], self.tri[ok], self.bary[ok], self.offset[ok], self.faces)
-
-
-class Gather:
-    """Vertices carried in a straight line from ``start`` to ``target`` over ``duration`` s from time
-    ``t0``, then held there (they are pinned in the model meanwhile): an inner garment's cloth
-    gathered onto the body under a band about to close over it (a tucked top, :func:`tailor.outfit.outfit`).
-    ``ids`` are mesh vertices, numbered by ``weld``."""
-
-    def __init__(self, ids, start, target, t0: float, duration: float, weld):
-        self.ids, first = np.unique(weld[ids], return_index=True)
-        self.start, self.target = np.asarray(start)[first], np.asarray(target)[first]
-        self.t0, self.duration = float(t0), float(duration)
-
-    def apply(self, state, body_x, body_v) -> None:
-        a = min(1.0, max(0.0, (state.t - self.t0) / self.duration))
-        state.x[self.ids] = self.start + a * (self.target - self.start)
-        state.v[self.ids] = (self.target - self.start) / self.duration if a < 1.0 else 0.0
-
-
-class HeightHold:
-    """Vertices kept at their heights while free to slide across (an attachment while sewing), and
-    the rest of their panels kept from rising above them.
-
-    Before gravity is on, a light panel (a waistband) sewn to a heavy one (the skirt) is pulled
-    to it, since the seaming springs (Eq. 15) move the lighter side further; holding the attached
-    edge's height draws the skirt up to the band instead, while the band's own seams still close
-    round the body, and the band's ceiling keeps the skirt coming up from folding it up over its
-    top. ``ids`` are mesh vertices and ``heights`` theirs [m]; ``under`` and ``ceilings`` [m] the
-    mesh vertices held below a height; ``weld`` numbers the simulated vertices (a welded vertex
-    takes its members' mean height, and the lowest ceiling).
-    """
-
-    def __init__(self, ids, heights, weld, under=(), ceilings=()):
-        self.ids, first = np.unique(weld[ids], return_inverse=True)
-        self.heights = np.bincount(first, heights) / np.bincount(first)
-        under = weld[np.asarray(under, np.intp)]
-        self.under = np.unique(under)
-        self.ceilings = np.full(len(self.under), np.inf)
-        np.minimum.at(self.ceilings, np.searchsorted(self.under, under), np.asarray(ceilings, float))
-
-    def apply(self, state, body_x, body_v) -> None:
-        z = state.x[self.under, 2]
-        over = z > self.ceilings
-        if over.any():
-            i = self.under[over]
-            state.x[i, 2] = self.ceilings[over]
-            state.v[i, 2] = np.minimum(state.v[i, 2], 0.0)
-        state.x[self.ids, 2] = self.heights
-        state.v[self.ids, 2] = 0.0
-
-
-class LimbWallContact:
-    """A leg's panels stay on their side of the plane between the legs, below the limb's landmark,
-    as the body moves (:func:`~tailor.limbwalls.limb_walls`): inelastic, like a body contact.
-
-    ``walls`` are the garment's :class:`~tailor.limbwalls.LimbWalls`; ``mesh`` and ``weld`` number
-    its vertices (a welded vertex whose members agree on one wall keeps to it); only the first
-    ``simulated`` of them are (default: all; an outfit's garments waiting to sew come last).
-    """
-
-    def __init__(self, walls, mesh, weld, thickness: float, *, simulated: int | None = None):
-        self.walls, self.thickness = walls, thickness
-        nw = int(weld.max()) + 1
-        lo, hi = np.full(nw, walls.count), np.full(nw, -1)
-        of = walls.of(mesh)
-        np.minimum.at(lo, weld, of)
-        np.maximum.at(hi, weld, of)
-        self.ids = np.flatnonzero((lo == hi) & (hi >= 0))
-        if simulated is not None:
-            self.ids = self.ids[self.ids < simulated]
-        self.which = hi[self.ids]
-
-    def apply(self, state, body_x, body_v) -> None:
-        if not len(self.ids):
-            return
-        normal, offset, height, speed = self.walls.at(body_x, body_v)
-        n, x = normal[self.which], state.x[self.ids]
-        depth = self.thickness - (np.einsum("ij,ij->i", x, n) - offset[self.which])
-        hit = (depth > 0) & (x[:, 2] < height[self.which])
-        if hit.any():
-            i, nh = self.ids[hit], n[hit]
-            state.x[i] += depth[hit, None] * nh
-            vn = np.einsum("ij,ij->i", state.v[i], nh) - speed[self.which[hit]]
-            state.v[i] -= np.minimum(vn, 0.0)[:, None] * nh
-
-
 class ContactLoads:
     """The forces the body and the attachments exert on the cloth, per vertex, averaged over the
     steps since they were last taken (one frame): what a fit map reads as contact and pressure.
@@ -219,6 +114,16 @@ class ContactLoads:
             self._body += response
         self._elapsed += dt
 
+    def checkpoint(self):
+        """What :meth:`restore` needs to forget the steps added after now."""
+        copy = None if self._body is None else (self._body.copy(), self._attached.copy())
+        return copy, self._elapsed
+
+    def restore(self, mark) -> None:
+        """The sums as they were at :meth:`checkpoint` ``mark``."""
+        copy, self._elapsed = mark
+        self._body, self._attached = (None, None) if copy is None else (copy[0].copy(), copy[1].copy())
+
     def take(self, n: int):
         """(body force, attachment force), each (n, 3) [N], averaged since the last take (zeros when
         nothing was summed for ``n`` vertices); the sums start again."""
@@ -227,6 +132,18 @@ class ContactLoads:
         if body is None or len(body) != n or elapsed <= 0:
             return np.zeros((n, 3)), np.zeros((n, 3))
         return body / elapsed, attached / elapsed
+
+
+@dataclass(frozen=True)
+class _Mark:
+    """The contacts' knowledge before a step (:meth:`ContactPipeline.checkpoint`)."""
+
+    pending: Contacts | None
+    start: np.ndarray | None
+    loads: tuple
+    body: tuple | None
+    collider: SelfCollider | None
+    previous: np.ndarray | None
 
 
 class ContactPipeline:
@@ -312,6 +229,26 @@ class ContactPipeline:
         self.pending = None
         if self.body is not None:
             self.body.forget()
+
+    def checkpoint(self) -> "_Mark":
+        """What the contacts know before a step, for :meth:`restore` to take them back to if the step
+        is undone (:meth:`tailor.sim.Stepper._step`)."""
+        collider = self._self
+        return _Mark(self.pending, self._start, self.loads.checkpoint(), None if self.body is None else self.body.checkpoint(),
+                     collider, None if collider is None else collider.previous)
+
+    def restore(self, mark: "_Mark", x) -> None:
+        """The contacts as :meth:`checkpoint` found them; the cloth is back at ``x``, where the step
+        undone began."""
+        self.pending, self._start = mark.pending, mark.start
+        self.loads.restore(mark.loads)
+        if self.body is not None:
+            self.body.restore(mark.body)
+        if self._self is not None:
+            if self._self is mark.collider and mark.previous is not None:
+                self._self.rewind(mark.previous)
+            else:  # built during the step undone (a renumbering): it starts from ``x``
+                self._self.moved(x)
 
     def predict(self, model, state, x_end, v_end, dt, held) -> Contacts | None:
         """The vertices a solved step would bring onto the body, as it is at the step's end."""

@@ -90,11 +90,16 @@ class Guard:
         Largest principal stretch of any triangle (1 = rest); woven cloth tears long before 3.
     strain_every : int
         Check strain every this many steps (speed and finiteness every step).
+    retries : int
+        A step that ends, after its contacts, with a triangle stretched beyond ``max_stretch`` is
+        taken again from where it began as two half steps, up to this many times over (Δt/8 at
+        most); :class:`~tailor.errors.SimulationUnstable` only where the smallest did not help.
     """
 
     max_speed: float = 50.0
     max_stretch: float = 3.0
     strain_every: int = 50
+    retries: int = 3
 
 
 def max_stretch(model, x) -> float:
@@ -156,6 +161,7 @@ class Stepper:
         self.hooks = tuple(hooks)
         self.guard = guard
         self.steps = 0
+        self.retried = 0  # steps undone and taken again in halves (Guard.retries)
 
     def configure(self, *, forces=None, guard: Guard | None = None) -> None:
         """The forces and the guard of the steps to come (a new phase, or a renumbered cloth)."""
@@ -165,16 +171,42 @@ class Stepper:
             self.guard = guard
 
     def step(self, model, state, h: float):
-        """One step of ``h`` and every response after it; the new state."""
+        """One step of ``h`` and every response after it; the new state (taken again in halves
+        where it overstretched: :meth:`_step`)."""
+        return self._step(model, state, h, 0)[0]
+
+    def _step(self, model, state, h: float, depth: int):
+        """(new state, whether it ends overstretched). A step whose end, after the contact responses,
+        stretches a triangle beyond the guard's ``max_stretch`` (a flap swung through the response
+        of a fold, a corner caught between two contacts) is undone, the contacts restored to what
+        they knew before it (:meth:`ContactPipeline.checkpoint`), and taken as two half steps, up to
+        ``guard.retries`` deep: Baraff & Witkin's adaptive step (1998, §5.4) applied to the whole
+        step, contacts included, where :class:`~tailor.integrators.ImplicitEuler` applies it to its
+        solve. The hooks run on the steps kept."""
+        pipe = self.contacts
+        retry = depth < self.guard.retries and model.face_count > 0
+        mark = pipe.checkpoint() if retry and pipe is not None else None
+        new = self._take(model, state, h)
+        over = model.face_count > 0 and max_stretch(model, new.x) > self.guard.max_stretch
+        if over and retry:
+            self.retried += 1
+            if pipe is not None:
+                pipe.restore(mark, state.x)
+            self.integrator.reset()
+            half, over = self._step(model, state, 0.5 * h, depth + 1)
+            return (half, over) if over else self._step(model, half, 0.5 * h, depth + 1)
+        for hook in self.hooks:
+            hook(model, new, h)
+        self.steps += 1
+        return new, over
+
+    def _take(self, model, state, h: float):
+        """The integrator's step from ``state`` (left as it was) and the contact responses on its end."""
         pipe = self.contacts
         if pipe is None:
-            result = self.integrator.step(model, state, h, self.forces)
-        else:
-            result = self.integrator.step(model, state, h, self.forces, contacts=pipe.hold(model), predict=pipe.predict)
-            pipe.respond(model, result.state, h, result.impulses, result.support)
-        for hook in self.hooks:
-            hook(model, result.state, h)
-        self.steps += 1
+            return self.integrator.step(model, state, h, self.forces).state
+        result = self.integrator.step(model, state, h, self.forces, contacts=pipe.hold(model), predict=pipe.predict)
+        pipe.respond(model, result.state, h, result.impulses, result.support)
         return result.state
 
     def advance(self, model, state, duration: float, dt: float | None = None, *, frame: int | None = None):
@@ -185,9 +217,9 @@ class Stepper:
         start = state.t
         check_state(model, state, step=0, dt=h, integrator=name, frame=frame, guard=self.guard)
         for k in range(1, substeps + 1):
-            state = self.step(model, state, h)
+            state, over = self._step(model, state, h, 0)
             check_state(model, state, step=k, dt=h, integrator=name, frame=frame, guard=self.guard,
-                        strain=k % self.guard.strain_every == 0)
+                        strain=over or k % self.guard.strain_every == 0)
         check_state(model, state, step=substeps, dt=h, integrator=name, frame=frame, guard=self.guard)
         state.t = start + duration
         return state

@@ -397,7 +397,9 @@ def simulate_tearing(cloth: TearableCloth, state, *, duration: float, fps: float
                                    thickness=thickness, friction=friction)
     integ = make_integrator(integrator)
     integ.configure(replace(integ.settings, wind=wind))  # the solve treats drag relative to this air
-    stepper = Stepper(integ, forces=functools.partial(total_forces, wind=wind), contacts=contacts, hooks=hooks, guard=guard)
+    # no step taken again for stretch: a tearing cloth stretches until it tears (its guard checks no strain)
+    stepper = Stepper(integ, forces=functools.partial(total_forces, wind=wind), contacts=contacts, hooks=hooks,
+                      guard=replace(guard, retries=0))
     frame_dt = 1.0 / fps
     h, substeps = stepper.substeps(cloth.model, frame_dt, min(TEAR_STEP, frame_dt) if dt is None and not integ.explicit else dt)
     pending = sorted(cuts, key=lambda c: c.time)

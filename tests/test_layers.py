@@ -15,7 +15,7 @@ LAYERS = {
     "mesh": 3, "placement": 3, "limbwalls": 3, "mannequin": 3, "measure": 3, "arms": 3,
     "params": 4, "model": 4, "sizing": 4,
     "forces": 5, "collide": 5, "seams": 5, "outfit": 5,
-    "integrators": 6, "contact": 6,
+    "integrators": 6, "contact": 6, "constraints": 6,
     "sim": 7, "scenes": 7, "dress": 7, "tearing": 7,
     "io": 8, "fit": 8, "lab": 8, "cli": 9, "__main__": 9, "__init__": 9, "bench": 9, "batch": 9, "validate": 9, "corpus": 9,
 }

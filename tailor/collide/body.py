@@ -124,6 +124,17 @@ class BodyCollider:
         self._previous = None
         self._seen = None
 
+    def checkpoint(self) -> tuple:
+        """What a step's response changes of what the collider remembers per vertex (the distances and
+        sides after the last response, the deepest penetration), for :meth:`restore`. The kept
+        candidates need no restoring: each vertex's stay valid at any position it is asked about
+        (:meth:`candidates` re-counts them)."""
+        return self._previous, self._seen, self.deepest
+
+    def restore(self, mark: tuple) -> None:
+        """What the collider remembered at :meth:`checkpoint` ``mark`` (a step undone)."""
+        self._previous, self._seen, self.deepest = mark
+
     def _body(self, frame):
         """(broad phase, triangles) of the body at ``frame``: the margin's FCL broad phase of its span of
         :data:`BODY_SPAN` frames (built round where each triangle is over them, so that the cubes it

@@ -9,35 +9,35 @@ threshold distance from the cloth's vertices") runs in three stages:
    the flat neighbourhoods of a patch that touches another (two layers of an outfit lying one over
    the other pair with each other, not with themselves).
 2. **Broad phase**: the active triangles that come within ``thickness + margin`` of an active
-   vertex anywhere on the step's straight-line motion, and the active edges that come that near
-   one another, found between boxes swept from each vertex's place at the last step to its place
-   now (relative to the cloth's centroid; a long step in parts, :mod:`.sweep`), over a compiled
-   uniform grid rebuilt each query (:mod:`.grid`: python-fcl can neither refit nor hand back pairs
-   without a Python object each). Each vertex is anchored where it was last queried; a pair stays valid while
-   neither end moves ``margin / 2`` from its anchor (two points then approach by less than
-   ``margin``). A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices
-   that have (the others' anchors are their boxes), unless most have.
+   vertex anywhere on the step's straight-line motion, and the active edges that come that near one
+   another, found between boxes swept from each vertex's place at the last step to its place now
+   (relative to the cloth's centroid; a long step in parts, :mod:`.sweep`), over a compiled uniform
+   grid rebuilt each query (:mod:`.grid`: python-fcl can neither refit nor hand back pairs without
+   a Python object each). Each vertex is anchored where it was last queried; a pair stays valid
+   while neither end moves ``margin / 2`` from its anchor (they approach by less than ``margin``).
+   A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices that have
+   (the others' anchors are their boxes), unless most have.
 3. **Narrow phase** (compiled): a vertex whose projection falls on a candidate triangle not at the
    vertex is a contact if it is nearer than ``thickness``, if its velocity would bring it nearer
    within the next step, or if it crossed the triangle's plane since the last step (judged by the
    side it was on then, and only if it travelled that far relative to the triangle). **Edge–edge**
-   pairs (none sharing an end) are judged the same way at their closest points, with the side of the edges' common
-   normal remembered: two sheets sliding across each other cross edge through edge with no vertex
-   ever over the other's triangle. A triangle touching the vertex's 1-ring (edges whose ends are
+   pairs (none sharing an end) are judged alike at their closest points, their common normal's side
+   remembered: two sheets sliding across each other cross edge through edge with no vertex ever
+   over the other's triangle. A triangle touching the vertex's 1-ring (edges whose ends are
    neighbours) keeps only :data:`NEAR_THICKNESS` of the thickness: a sharp seam corner is close
    without touching, but a fold over one or two triangles must not pass through itself.
 
 Response (Eq. 5–8): the vertex p₀ and the triangle point p₁ = Σ wᵢxᵢ get equal and opposite
-impulses (p₁'s share spread over its vertices in proportion to wᵢ), so linear momentum is
-conserved exactly. Along the normal the collision is perfectly inelastic: p₀ and p₁ leave with
-the normal velocity of their centre of mass (Eq. 6–7), using the triangle point's effective mass
-1/m₁ = Σ wᵢ²/mᵢ, for which Eq. 7 holds exactly at p₁ (Carignan's interpolated m₁ misses it once
-the impulse is spread). Two deliberate departures: the sliding part loses at most μ times the
-normal change (Coulomb, as Eq. 14 for the body) instead of being cancelled too (with full
-cancellation layers glue, and a glued layer is torn by its falling neighbours); and a predicted contact only has its approach slowed so that it arrives at
-``thickness`` at the end of the next step. Positions are separated to ``thickness`` with the same
-weights (the centre of mass does not move). Contacts are relaxed Gauss–Seidel style and detection
-repeats until no new contact appears.
+impulses (p₁'s share spread over its vertices in proportion to wᵢ), so linear momentum is conserved
+exactly. Along the normal the collision is perfectly inelastic: p₀ and p₁ leave with the normal
+velocity of their centre of mass (Eq. 6–7), using the triangle point's effective mass 1/m₁ = Σ
+wᵢ²/mᵢ, for which Eq. 7 holds exactly at p₁ (Carignan's interpolated m₁ misses it once the impulse
+is spread). Two deliberate departures: the sliding part loses at most μ times the normal change
+(Coulomb, as Eq. 14 for the body) instead of being cancelled too (with full cancellation layers
+glue, and a glued layer is torn by its falling neighbours); and a predicted contact only has its
+approach slowed so that it arrives at ``thickness`` at the end of the next step. Positions are
+separated to ``thickness`` with the same weights (the centre of mass does not move). Contacts are
+relaxed Gauss–Seidel style and detection repeats until no new contact appears.
 
 Fast motion: when the ends of a candidate pair moved more than one thickness relative to each
 other in the step, the step's motion is replayed in up to :data:`MAX_SUBSTEPS` sub-steps of at most
@@ -133,12 +133,8 @@ class SelfCollider:
             raise ValueError(f"self-collision mode must be 'auto' or 'on', got {mode!r}")
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.n = len(x)
-        self.thickness = float(thickness)
-        self.friction = float(friction)
-        self.edges = bool(edges)
-        self.mode = mode
-        self.layers = layers
-        self.partial = float(partial)
+        self.thickness, self.friction, self.edges = float(thickness), float(friction), bool(edges)
+        self.mode, self.layers, self.partial = mode, layers, float(partial)
         if garment is None and layers is not None:
             garment = layers.vertex_layer(self.faces, self.n)
         self._garment = None if garment is None else np.asarray(garment, np.int64)  # each vertex's garment (its layer)
@@ -484,6 +480,10 @@ class SelfCollider:
         and the candidates are found again at the next step."""
         self._x_prev = np.array(x, float)
         self._anchor = None
+
+    def rewind(self, previous) -> None:
+        """A step undone: taken again from ``previous``, the sides there kept (the candidates hold for any path)."""
+        self._x_prev = previous
 
     def carry_stats(self, stats: dict) -> None:
         """Continue the counters of a collider this one replaces (welding renumbered the cloth)."""

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..contact import Attachments
+from ..constraints import Attachments
 from ..forces import total_forces
 from ..forces.membrane import face_stretch
 from ..model import AIR_DENSITY, build_model

@@ -21,7 +21,7 @@ from functools import partial
 
 import numpy as np
 
-from ..contact import Gather, HeightHold, LimbWallContact
+from ..constraints import Gather, HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..outfit import garment_of_vertex, tuck_targets
