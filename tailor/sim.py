@@ -92,14 +92,15 @@ class Guard:
         Check strain every this many steps (speed and finiteness every step).
     retries : int
         A step that ends, after its contacts, with a triangle stretched beyond ``max_stretch`` is
-        taken again from where it began as two half steps, up to this many times over (Δt/8 at
-        most); :class:`~tailor.errors.SimulationUnstable` only where the smallest did not help.
+        taken again from where it began as two half steps, up to this many times over (Δt/64 at
+        most: a 256² sheet folding off the sphere at draft needs it);
+        :class:`~tailor.errors.SimulationUnstable` only where the smallest did not help.
     """
 
     max_speed: float = 50.0
     max_stretch: float = 3.0
     strain_every: int = 50
-    retries: int = 3
+    retries: int = 6
 
 
 def max_stretch(model, x) -> float:

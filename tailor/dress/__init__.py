@@ -232,7 +232,7 @@ def _close(report: DrapeReport, d: Dressing, t_start: float, body) -> None:
     report.wall_s = time.perf_counter() - t_start
     report.steps = d.stepper.steps
     report.cg_iterations = counters.iterations
-    report.halved_steps = counters.halved_steps()
+    report.halved_steps = {**counters.halved_steps(), "overstretched_by_contacts": d.stepper.retried}
     report.body_bvh_queries = d.contacts.body.queries
     report.max_contact_correction_m = d.contacts.deepest
     report.vertices_rescued_from_inside_body = d.contacts.rescued

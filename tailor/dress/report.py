@@ -80,7 +80,7 @@ class DrapeReport:
     wall_s: float = 0.0
     steps: int = 0
     cg_iterations: int = 0
-    halved_steps: dict = field(default_factory=dict)  # implicit steps taken as halves, by cause
+    halved_steps: dict = field(default_factory=dict)  # steps taken as halves, by cause (the solve's; the contacts overstretching)
     body_bvh_queries: int = 0
     max_contact_correction_m: float = 0.0  # deepest penetration any step had to undo
     vertices_rescued_from_inside_body: int = 0
