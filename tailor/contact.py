@@ -120,9 +120,9 @@ class ContactLoads:
         return copy, self._elapsed
 
     def restore(self, mark) -> None:
-        """The sums as they were at :meth:`checkpoint` ``mark``."""
+        """The sums as they were at :meth:`checkpoint` ``mark`` (restored once: its arrays are taken)."""
         copy, self._elapsed = mark
-        self._body, self._attached = (None, None) if copy is None else (copy[0].copy(), copy[1].copy())
+        self._body, self._attached = (None, None) if copy is None else copy
 
     def take(self, n: int):
         """(body force, attachment force), each (n, 3) [N], averaged since the last take (zeros when

@@ -181,7 +181,7 @@ class Stepper:
         stretches a triangle beyond the guard's ``max_stretch`` (a flap swung through the response
         of a fold, a corner caught between two contacts) is undone, the contacts restored to what
         they knew before it (:meth:`ContactPipeline.checkpoint`), and taken as two half steps, up to
-        ``guard.retries`` deep: Baraff & Witkin's adaptive step (1998, §5.4) applied to the whole
+        ``guard.retries`` deep: Baraff & Witkin's adaptive step size (1998) applied to the whole
         step, contacts included, where :class:`~tailor.integrators.ImplicitEuler` applies it to its
         solve. The hooks run on the steps kept."""
         pipe = self.contacts
