@@ -111,6 +111,7 @@ class SparsePattern:
         vertex pairs, (E, k, k) (32-bit where they fit: the largest array of the pattern)."""
         self._groups = groups
         self._colors = [None] * len(groups)
+        self._moving = [None] * len(groups)  # (still mask, its classes) last asked of colors_moving
 
     @cached_property
     def parts(self) -> list[BlockPart]:
@@ -172,6 +173,22 @@ class SparsePattern:
         if self._colors[group] is None:
             self._colors[group] = element_colors(self._groups[group], self.shape[0] // 3)
         return self._colors[group]
+
+    def colors_moving(self, group: int, still):
+        """:meth:`colors` less the elements whose every vertex is ``still`` ((N,) bool: pinned and at
+        rest, as an outfit's inner garments held while the next one sews): such an element adds
+        nothing to K·v and only to blocks of pinned rows and columns, which the solve replaces by
+        the identity, so leaving it out of the assembly changes nothing. Remembered for the last
+        mask asked."""
+        order, ptr = self.colors(group)
+        if not still.any():
+            return order, ptr
+        last = self._moving[group]
+        if last is None or not np.array_equal(last[0], still):
+            keep = ~still[self._groups[group][order]].all(axis=1)
+            counts = np.bincount(np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))[keep], minlength=len(ptr) - 1)
+            self._moving[group] = last = (still.copy(), (order[keep], np.concatenate([[0], np.cumsum(counts)]).astype(ptr.dtype)))
+        return last[1]
 
     def blocks(self, data) -> np.ndarray:
         """The stored values as 3×3 blocks (B, 3, 3) in the order of ``block_indptr``/``block_cols``."""
@@ -267,10 +284,11 @@ def implicit_blocks(model, state, pattern: SparsePattern, dt: float):
         return pattern.blocks(dt * cdata + (dt * dt) * kdata), (pattern.csr(kdata) @ v.reshape(-1)).reshape(-1, 3)
     blocks = np.zeros((len(pattern.block_cols), 3, 3))
     kv = np.zeros((model.vertex_count, 3))
-    membrane_system_into(model, state, pattern.element_blocks[0], pattern.colors(0), dt, blocks, kv,
+    still = np.asarray(model.vertex_pinned) & ~v.any(axis=1)  # pinned at rest: their elements add nothing kept
+    membrane_system_into(model, state, pattern.element_blocks[0], pattern.colors_moving(0, still), dt, blocks, kv,
                          stiffness=secant_membrane_stiffness(model, state.x) if model.strain_dependent else None)
     if model.has_bending:
-        bending_system_into(model, state, pattern.element_blocks[1], pattern.colors(1), dt, blocks, kv,
+        bending_system_into(model, state, pattern.element_blocks[1], pattern.colors_moving(1, still), dt, blocks, kv,
                             stiffness=secant_hinge_stiffness(model, state.x) if model.has_curves else None)
     if pattern.has_pairs:
         i, j = np.asarray(model.pair_vertices).T
