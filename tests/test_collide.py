@@ -217,6 +217,7 @@ def test_kept_body_candidates_hold_every_triangle_within_half_the_margin_as_the_
     still = frames[0][ids] + 0.015 * normals[0]  # cloth left behind where the body was: the body moves past it
     kept = BodyCollider(frames, faces, margin=0.03)
     exact = BodyCollider(frames, faces, margin=0.015)
+    some = BodyCollider(frames, faces, margin=0.03)  # asked about some of the points each time (a landing's)
     for step in range(3 * (len(frames) - 1) + 1):
         s = step / 3.0
         i, a = int(s), s - int(s)
@@ -226,6 +227,10 @@ def test_kept_body_candidates_hold_every_triangle_within_half_the_margin_as_the_
         frame = int(round(s))
         have, need = (_pairs(*c.candidates(x, frame, cache=c is kept)) for c in (kept, exact))
         assert need <= have, f"step {step}: {len(need - have)} pairs within half the margin missing"
+        rows = np.flatnonzero(rng.random(len(x)) < 0.5)
+        asked = set(rows.tolist())
+        part = {p for p in _pairs(*some.candidates(x, frame, rows=rows)) if p[0] in asked}
+        assert {p for p in need if p[0] in asked} <= part, f"step {step}: pairs of the points asked about missing"
     # asking again on every new frame would ask about every point 24 times (and more between frames)
     assert kept.queried_points < 0.75 * len(x) * (len(frames) - 1)
 

@@ -149,7 +149,7 @@ class BodyCollider:
         f = self.frames[span * BODY_SPAN:(span + 1) * BODY_SPAN]
         return NearCubes(TriangleBoxes(f[0], self.faces, BOX_CELL, vertex_boxes=(f.min(axis=0), f.max(axis=0))), self.margin)
 
-    def candidates(self, x, frame: int, *, cache: bool = True):
+    def candidates(self, x, frame: int, *, cache: bool = True, rows=None):
         """(lo, hi, tri): the body triangles within ``margin`` of vertex i are ``tri[lo[i]:hi[i]]`` (FCL broad phase).
 
         With ``cache`` each vertex keeps its answer while it is certain to hold every triangle
@@ -157,7 +157,8 @@ class BodyCollider:
         it moves and, when the body frame changes, how much closer the body near it came relative
         to it (:class:`~tailor.collide.drift.BodyDrift`; the trunk under a shirt moves with the
         shirt, a swinging arm does not). Only the vertices that spent it are asked again (sewing
-        moves a few fast, settling and walking move most slowly).
+        moves a few fast, settling and walking move most slowly). With ``rows`` (sorted vertex ids)
+        only their answers are brought up to date (the others may be stale: not to be read).
         """
         if not np.all(np.isfinite(x)):  # FCL would crash on NaN; the guard reports instabilities
             raise SimulationUnstable("cloth positions became NaN or infinite before the body collision query; "
@@ -173,9 +174,11 @@ class BodyCollider:
             return c.spans()
         if c.frame != frame:
             c.spend(self._drift(c.frame, frame).relative(x, x - c.ref), x, frame)
-        step = x - c.ref
-        moved = np.flatnonzero(np.einsum("ij,ij->i", step, step) >= np.maximum(c.slack, 0.0) ** 2)
-        if len(moved):
+        ids = np.arange(len(x)) if rows is None else np.asarray(rows, np.int64)
+        step = x[ids] - c.ref[ids]
+        travel, budget = np.einsum("ij,ij->i", step, step), np.maximum(c.slack[ids], 0.0) ** 2
+        if (travel >= budget).any():  # a query is made: those three quarters through their budget too (they would be next)
+            moved = ids[travel >= 0.5625 * budget]
             c.renew(moved, x, self._query(x[moved], frame, moved), len(self.faces), 0.5 * self.margin)
         return c.spans()
 
@@ -295,7 +298,7 @@ class BodyCollider:
         if skip is not None and len(skip):
             test[skip] = False
         rows = np.flatnonzero(test & ~self._out_of_reach(x_end, body_x, thickness))
-        dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, self.candidates(x_end, frame), body_x, rows),
+        dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, self.candidates(x_end, frame, rows=rows), body_x, rows),
                                                      body_x)
         close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
         if not len(close):
