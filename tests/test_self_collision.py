@@ -317,6 +317,33 @@ def test_edge_pairs_between_garments_point_out_of_the_inner_edge():
     np.testing.assert_allclose(out[la != lb, :2], 0.0, atol=1e-12)
 
 
+def test_edge_directions_are_the_inner_edges_summed_outward_normals_and_zero_where_loose():
+    """The compiled Layers.edge_directions against numpy's sums of the faces' normals (turned out by
+    each face's ``face_out``) on a crumpled two-layer cloth, with part of the outer layer loose."""
+    from tailor.collide import Layers
+    from tailor.geometry import vertex_normals
+
+    model, x0 = stacked(-0.004, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    rng = np.random.default_rng(3)
+    x = x0 + rng.normal(0.0, 0.003, x0.shape)
+    faces = np.asarray(model.faces)
+    out_sign = rng.choice(np.array([-1, 1], np.int8), len(faces))
+    vertex_layer = np.zeros(model.vertex_count, np.int64)
+    vertex_layer[faces] = np.asarray(model.face_panel, np.int64)[:, None]
+    loose = np.where((vertex_layer == 1) & (rng.random(model.vertex_count) < 0.3), 0, -1)
+    layers = Layers(model.face_panel.astype(np.int64), out_sign, loose)
+    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    pairs = np.hstack([edges[rng.integers(0, len(edges), 600)], edges[rng.integers(0, len(edges), 600)]])
+    got = layers.edge_directions(vertex_layer, faces, x, pairs)
+    normal = vertex_normals(x, faces, out_sign)
+    la, lb = vertex_layer[pairs[:, 0]], vertex_layer[pairs[:, 2]]
+    free = (la == lb) | (loose[pairs[:, :2]] == lb[:, None]).any(axis=1) | (loose[pairs[:, 2:]] == la[:, None]).any(axis=1)
+    expect = np.where((la > lb)[:, None], normal[pairs[:, 2]] + normal[pairs[:, 3]], -(normal[pairs[:, 0]] + normal[pairs[:, 1]]))
+    expect[free] = 0.0
+    assert free.any() and (~free).any() and (loose[pairs] >= 0).any()
+    np.testing.assert_allclose(got, expect, rtol=1e-12, atol=1e-18)
+
+
 def test_cloth_contact_holds_the_vertices_pinned_now(monkeypatch):
     # pins change without the vertex count changing (attachments at settling, an outfit's garment
     # released after waiting to sew): cloth-cloth contact must not move a pinned vertex, nor keep

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..geometry import vertex_normals
 
@@ -74,21 +75,53 @@ class Layers:
 
     def edge_directions(self, vertex_layer, faces, x, pairs) -> np.ndarray:
         """(E, 3) per edge pair (a0, a1, b0, b1): the direction edge a belongs in from edge b (the
-        inner edge's outward normal, signed), zero within one garment or where either is loose
-        against the other."""
+        inner edge's outward normal, signed: the sum of its ends' area-weighted normals, each face's
+        turned out by ``face_out``), zero within one garment or where either is loose against the
+        other. Compiled: asked at every self-contact query of an outfit."""
         out = np.zeros((len(pairs), 3))
-        la, lb = vertex_layer[pairs[:, 0]], vertex_layer[pairs[:, 2]]
-        free = la == lb  # most candidates lie within one garment: no normals for them
-        if self.loose is not None:
-            free |= (self.loose[pairs[:, :2]] == lb[:, None]).any(axis=1) | (self.loose[pairs[:, 2:]] == la[:, None]).any(axis=1)
-        between = np.flatnonzero(~free)
-        if not len(between):
-            return out
-        p = pairs[between]
-        needed = np.zeros(len(x), bool)
-        needed[p.ravel()] = True
-        touch = np.flatnonzero(needed[faces].any(axis=1))  # every face at a vertex asked about, no other
-        normal = vertex_normals(x, faces[touch], np.asarray(self.face_out)[touch])  # pointing out, away from the body
-        a_outside = (la[between] > lb[between])[:, None]
-        out[between] = np.where(a_outside, normal[p[:, 2]] + normal[p[:, 3]], -(normal[p[:, 0]] + normal[p[:, 1]]))
+        loose = np.zeros(0, np.int64) if self.loose is None else np.asarray(self.loose, np.int64)
+        if len(pairs):
+            _edge_directions(np.ascontiguousarray(pairs, np.int64), np.asarray(vertex_layer, np.int64), loose,
+                             np.ascontiguousarray(faces, np.int64), np.asarray(self.face_out, np.int64),
+                             np.ascontiguousarray(x, np.float64), out)
         return out
+
+
+@njit(cache=True)
+def _edge_directions(pairs, layer, loose, faces, face_out, x, out):
+    """:meth:`Layers.edge_directions` into ``out`` (``loose`` empty: none): the pairs between garments
+    first, then the normals at their ends only (faces in order, as :func:`vertex_normals` sums them)."""
+    between = np.zeros(len(pairs), np.bool_)
+    needed = np.zeros(len(x), np.bool_)
+    for k in range(len(pairs)):
+        la, lb = layer[pairs[k, 0]], layer[pairs[k, 2]]
+        free = la == lb
+        if not free and len(loose):
+            free = loose[pairs[k, 0]] == lb or loose[pairs[k, 1]] == lb or loose[pairs[k, 2]] == la or loose[pairs[k, 3]] == la
+        if not free:
+            between[k] = True
+            for m in range(4):
+                needed[pairs[k, m]] = True
+    normal = np.zeros((len(x), 3))
+    for f in range(len(faces)):
+        i, j, k = faces[f, 0], faces[f, 1], faces[f, 2]
+        if not (needed[i] or needed[j] or needed[k]):
+            continue
+        u0, u1, u2 = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]
+        w0, w1, w2 = x[k, 0] - x[i, 0], x[k, 1] - x[i, 1], x[k, 2] - x[i, 2]
+        s = float(face_out[f])
+        n0, n1, n2 = (u1 * w2 - u2 * w1) * s, (u2 * w0 - u0 * w2) * s, (u0 * w1 - u1 * w0) * s
+        for c in (i, j, k):
+            normal[c, 0] += n0
+            normal[c, 1] += n1
+            normal[c, 2] += n2
+    for k in range(len(pairs)):
+        if not between[k]:
+            continue
+        a0, a1, b0, b1 = pairs[k, 0], pairs[k, 1], pairs[k, 2], pairs[k, 3]
+        if layer[a0] > layer[b0]:
+            for d in range(3):
+                out[k, d] = normal[b0, d] + normal[b1, d]
+        else:
+            for d in range(3):
+                out[k, d] = -(normal[a0, d] + normal[a1, d])
