@@ -108,6 +108,35 @@ def test_landing_skips_the_vertices_it_is_told_are_held_and_finds_the_same_other
     assert np.array_equal(ids2, ids[keep]) and np.allclose(normals2, normals[keep]) and np.allclose(vn2, vn[keep])
 
 
+def test_landing_tests_of_one_step_skip_what_cannot_have_come_near_and_find_what_a_fresh_test_finds(monkeypatch):
+    """A step's contact passes ask about landings with the body where it stands at the step's end:
+    a vertex found far enough away is not tested again unless it moved that far, and each pass finds
+    exactly the landings a collider asked for the first time finds (a cloth falling in passes, then
+    the body moved on: tested afresh)."""
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.2)
+    model, x0 = sheet(20, 20, 0.02, "cotton", vertical=False)
+    x = x0 - x0.mean(axis=0) + [0.0, 0.0, 0.2015]
+    body = np.asarray(ball.vertices)
+    kept, rows = BodyCollider(body[None], ball.faces, margin=0.02), []
+    closest = BodyCollider._closest
+
+    def counted(self, x, spans, body_x, rows_=None):
+        if self is kept:
+            rows.append(len(rows_))
+        return closest(self, x, spans, body_x, rows_)
+
+    monkeypatch.setattr(BodyCollider, "_closest", counted)
+    for k, fall in enumerate((0.2, 0.21, 0.5, 2.0, 2.0)):
+        v = np.tile([0.0, 0.0, -fall], (len(x), 1))
+        where = body if k < 4 else body + [0.0, 0.0, 0.001]  # the last pass: the next step's body
+        args = (model, x + 0.01 * v, v, 0.01, where, np.zeros_like(body), 0)
+        fresh = BodyCollider(body[None], ball.faces, margin=0.02).landing(*args, thickness=0.002)
+        seen = kept.landing(*args, thickness=0.002)
+        assert np.array_equal(seen.ids, fresh.ids) and np.array_equal(seen.normal_velocity, fresh.normal_velocity)
+    assert len(fresh.ids) > 50
+    assert rows[1] < rows[0] and rows[4] == rows[0]  # moved a little: fewer tested; the body moved: all again
+
+
 def test_clustered_query_finds_exactly_the_pairs_of_one_sphere_per_point():
     from tailor.collide import TriangleBoxes, bvh_object, clustered_query, sphere_query
 

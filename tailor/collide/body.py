@@ -68,6 +68,30 @@ class _Kept:
         self.slots[vertex, np.arange(len(keys)) - np.repeat(start, count)] = tri
 
 
+class _Tested:
+    """The landing tests against the body standing at ``body_x`` (a step's end, the same for each of
+    the step's contact passes): per vertex where it was last tested and a lower bound of its distance
+    from the body there (−inf: never tested). A vertex at least ``bound`` away cannot have come within
+    the thickness unless it has moved more than ``bound`` less the thickness since."""
+
+    def __init__(self, body_x, n: int):
+        self.body_x = body_x
+        self.x = np.zeros((n, 3))
+        self.bound = np.full(n, -np.inf)
+
+    def unclear(self, rows, x, thickness) -> np.ndarray:
+        """Those of ``rows`` that may be within ``thickness`` at ``x``."""
+        moved = np.linalg.norm(x[rows] - self.x[rows], axis=1)
+        return rows[self.bound[rows] - moved <= _at(thickness, rows)]
+
+    def found(self, rows, x, dist, tri, half) -> None:
+        """``rows`` tested at ``x``: ``dist``, ``tri`` as :meth:`BodyCollider._closest` gives them (a
+        distance is exact within ``half`` the margin, where every triangle is a candidate; none found
+        or a farther one means at least that)."""
+        self.x[rows] = x[rows]
+        self.bound[rows] = np.minimum(np.where(tri[rows] >= 0, dist[rows], np.inf), half)
+
+
 class _Seen:
     """The cloth at the last response: positions ``x``, lower bounds of their distances from the body
     (``bound`` [m], at most ``reach``; negative inside), of how far outside it they surely were
@@ -114,6 +138,7 @@ class BodyCollider:
         self._previous = None  # signed distance of every vertex after the last response
         self._seen: _Seen | None = None  # where the cloth and the body were at the last response
         self._inside_test = None  # (body positions, their InsideTest)
+        self._tested: _Tested | None = None  # the landing tests against the body where it stands now
         self.deepest = 0.0  # deepest penetration any response found [m]
         self.queries = 0
         self.queried_points = 0
@@ -123,6 +148,7 @@ class BodyCollider:
         self._cache = None
         self._previous = None
         self._seen = None
+        self._tested = None
 
     def checkpoint(self) -> tuple:
         """What a step's response changes of what the collider remembers per vertex (the distances and
@@ -298,8 +324,13 @@ class BodyCollider:
         if skip is not None and len(skip):
             test[skip] = False
         rows = np.flatnonzero(test & ~self._out_of_reach(x_end, body_x, thickness))
+        tested = self._tested
+        if tested is None or len(tested.x) != len(x_end) or not _same(tested.body_x, body_x):
+            tested = self._tested = _Tested(body_x, len(x_end))
+        rows = tested.unclear(rows, x_end, thickness)
         dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, self.candidates(x_end, frame, rows=rows), body_x, rows),
                                                      body_x)
+        tested.found(rows, x_end, dist, tri, 0.5 * self.margin)
         close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
         if not len(close):
             return Contacts(np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0), model.vertex_count)
