@@ -119,6 +119,36 @@ def test_the_draft_preset_drops_a_fine_sheet_onto_the_sphere_without_tearing_it(
     assert np.linalg.norm(run.frames[-1], axis=1).min() > 0.25 * np.cos(np.pi / 40)  # outside the faceted sphere
 
 
+@pytest.mark.parametrize("speed, mu", [(0.05, 0.5), (0.5, 0.5), (0.5, 0.2), (0.02, 0.3)])
+def test_a_sheet_sliding_on_a_floor_ends_its_step_where_coulomb_friction_stops_it(speed, mu):
+    # a flat sheet sliding at ``speed`` on a floor that pushed it with its weight: Eq. 14 takes at
+    # most μ·g·Δt off its speed in a step, and stops it where that is enough. The friction is a drag
+    # inside the solve: it must end each vertex there, never reversed, and the contact's impulse
+    # (what the loads report) must balance the sheet's change of momentum.
+    from tailor.forces import total_forces
+    mesh, model = _cloth(6)
+    n, dt = model.vertex_count, 0.01
+    direction = np.array([0.6, 0.8, 0.0])
+    state = model.state(np.c_[mesh.uv, np.zeros(n)], np.tile(speed * direction, (n, 1)))
+    weight = model.vertex_mass * GRAVITY
+    contacts = Contacts(np.arange(n), np.tile([0.0, 0.0, 1.0], (n, 1)), np.zeros(n), n, body_velocity=np.zeros((n, 3)),
+                        friction=np.full(n, mu), normal_force=weight)
+    integ = ImplicitEuler(tolerance=1e-12)
+    result = integ.step(model, state, dt, total_forces, contacts=contacts)
+    expected = max(speed - mu * GRAVITY * dt, 0.0)
+    v = result.state.v
+    assert np.abs(v[:, 2]).max() < 1e-9  # held on the floor
+    along = v @ direction
+    assert np.all(along >= 0.0)  # never reversed
+    assert np.allclose(along, expected, atol=integ.stick_speed)
+    assert np.abs(v - along[:, None] * direction).max() < 1e-9  # no sideways push
+    # the floor's whole impulse (normal and friction) is the sheet's change of momentum less gravity's
+    gravity = np.zeros((n, 3))
+    gravity[:, 2] = -weight * dt
+    assert np.allclose(result.support, model.vertex_mass[:, None] * (v - state.v) - gravity, atol=1e-9)
+    assert np.allclose(result.impulses, weight * dt, rtol=1e-6)
+
+
 def _incline(theta):
     """A 4 m square plane through the origin, tilted by ``theta`` about x (downhill = −y)."""
     c, s = np.cos(theta), np.sin(theta)

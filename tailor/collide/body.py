@@ -393,8 +393,9 @@ class BodyCollider:
         ``impulse`` (N,) [N·s], optional: the normal impulse the integrator's solve already gave
         each vertex it held on the body (the contacts this returned last step); it counts towards
         the friction budget of Eq. 14 like the approach cancelled here. Returns the vertices
-        resting on the body and not being pulled into it, for the next implicit step to hold
-        (stuck: friction stopped them here; the solve lets them slide at the Coulomb limit).
+        resting on the body and not being pulled into it, for the next implicit step to hold, each
+        with the normal force the body gave it over this step (the solve's and this response's):
+        the next step's friction budget.
         :attr:`deepest` keeps the deepest penetration any response found.
         """
         hit, dist, tri, bary, normal = self._hits(state.x, body_x, frame, thickness)
@@ -437,8 +438,9 @@ class BodyCollider:
         # resting (not leaving) and not held by a pull last step: held during the next one
         rest = (np.einsum("ij,ij->i", new_rel, n) <= 1e-9) & (held >= 0)
         mu = np.broadcast_to(mu, hit.shape)
+        push = (model.vertex_mass[hit] * (np.maximum(held, 0.0) + dv_n) / dt)[rest]  # [N]: the solve's and this response's
         return Contacts(hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]), model.vertex_count,
-                        stick=np.ones(int(rest.sum()), bool), body_velocity=vb[rest], friction=mu[rest])
+                        body_velocity=vb[rest], friction=mu[rest], normal_force=push)
 
 
 def _recent(store: dict, key, keep: int, make):

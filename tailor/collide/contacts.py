@@ -19,9 +19,11 @@ class Contacts:
     """Body contacts to hold during the next implicit step.
 
     Vertex ``ids[k]`` ends the step with velocity ``normal_velocity[k]`` along the unit
-    ``normals[k]`` (the body's own normal velocity: no approach), free in the tangent plane —
-    unless ``stick[k]``: then it keeps the body's velocity ``body_velocity[k]`` entirely (static
-    friction), as long as the reaction stays inside the Coulomb cone of ``friction[k]``.
+    ``normals[k]`` (the body's own normal velocity: no approach), free in the tangent plane but
+    for friction: ``friction[k]`` (μ) times ``normal_force[k]`` [N], the body's push on it over
+    the step that found the contact, resists its tangent motion relative to ``body_velocity[k]``
+    (Eq. 14's Coulomb friction, regularised and held inside the implicit solve's matrix). A contact
+    without a normal force (a predicted landing) slides freely in the step it lands.
     ``vertex_count`` is the size of the model they were found for; they are ignored on another.
     """
 
@@ -29,9 +31,9 @@ class Contacts:
     normals: np.ndarray
     normal_velocity: np.ndarray
     vertex_count: int
-    stick: np.ndarray | None = None
     body_velocity: np.ndarray | None = None
     friction: np.ndarray | None = None
+    normal_force: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.ids)

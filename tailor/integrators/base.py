@@ -43,7 +43,6 @@ class Counters:
     stretch_halvings: int = 0  # ... because a triangle would stretch too far in one step
     landing_halvings: int = 0  # ... because vertices were still landing on the body after every contact pass
     predicted: int = 0  # contacts added by the landing prediction
-    slipped: int = 0  # stuck contacts whose reaction left the Coulomb cone
     released: int = 0  # held contacts the body would have had to pull on
 
     def halved_steps(self) -> dict:
@@ -54,7 +53,8 @@ class Counters:
 @dataclass(frozen=True, slots=True)
 class StepResult:
     """One step: the new state, the normal impulse [N·s] the solve gave each vertex it held on the
-    body ((N,), None if it held none), the CG iterations it took, and ``support`` ((N, 3) [N·s],
+    body ((N,), None if it held none; of a step taken as halves, the last half's at the whole
+    step's rate, so that over the step it gives the force that holds the vertex now), the CG iterations it took, and ``support`` ((N, 3) [N·s],
     None if nothing held the cloth): the whole impulse, friction included, that the held body
     contacts and the pinned vertices' attachments gave the cloth during the step."""
 

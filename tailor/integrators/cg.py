@@ -40,33 +40,31 @@ def bsr_rows(bptr, bcol, blocks, x, rows, out):
 
 
 @njit(cache=True, inline="always")
-def _held_part(v0, v1, v2, c, normals, stick):
+def _held_part(v0, v1, v2, c, normals):
     """(v0, v1, v2) without its held part if the vertex is held contact ``c`` (−1: not held): the
-    normal component, or all of it if stuck."""
+    normal component."""
     if c < 0:
         return v0, v1, v2
-    if stick[c]:
-        return 0.0, 0.0, 0.0
     d = v0 * normals[c, 0] + v1 * normals[c, 1] + v2 * normals[c, 2]
     return v0 - d * normals[c, 0], v1 - d * normals[c, 1], v2 - d * normals[c, 2]
 
 
 @njit(cache=True, parallel=True)
-def _cg_product(bptr, bcol, blocks, p, q, held, normals, stick, part):
+def _cg_product(bptr, bcol, blocks, p, q, held, normals, part):
     """q = filter(A·p) and the chunks' partial sums of p·q, in one pass."""
     n = len(bptr) - 1
     for ch in prange((n + _CHUNK - 1) // _CHUNK):
         acc = 0.0
         for i in range(ch * _CHUNK, min(n, (ch + 1) * _CHUNK)):
             a0, a1, a2 = _block_row(bptr, bcol, blocks, p, i)
-            a0, a1, a2 = _held_part(a0, a1, a2, held[i], normals, stick)
+            a0, a1, a2 = _held_part(a0, a1, a2, held[i], normals)
             q[3 * i], q[3 * i + 1], q[3 * i + 2] = a0, a1, a2
             acc += p[3 * i] * a0 + p[3 * i + 1] * a1 + p[3 * i + 2] * a2
         part[ch] = acc
 
 
 @njit(cache=True, parallel=True)
-def _cg_update(alpha, x, r, p, q, z, pinv, held, normals, stick, part_rz, part_rr):
+def _cg_update(alpha, x, r, p, q, z, pinv, held, normals, part_rz, part_rr):
     """x += α·p, r −= α·q, z = filter(P·r) and the chunks' partial sums of r·z and r·r, in one pass."""
     n = len(pinv)
     for ch in prange((n + _CHUNK - 1) // _CHUNK):
@@ -80,7 +78,7 @@ def _cg_update(alpha, x, r, p, q, z, pinv, held, normals, stick, part_rz, part_r
             z0 = pinv[i, 0, 0] * r0 + pinv[i, 0, 1] * r1 + pinv[i, 0, 2] * r2
             z1 = pinv[i, 1, 0] * r0 + pinv[i, 1, 1] * r1 + pinv[i, 1, 2] * r2
             z2 = pinv[i, 2, 0] * r0 + pinv[i, 2, 1] * r1 + pinv[i, 2, 2] * r2
-            z0, z1, z2 = _held_part(z0, z1, z2, held[i], normals, stick)
+            z0, z1, z2 = _held_part(z0, z1, z2, held[i], normals)
             z[3 * i], z[3 * i + 1], z[3 * i + 2] = z0, z1, z2
             rz += r0 * z0 + r1 * z1 + r2 * z2
             rr += r0 * r0 + r1 * r1 + r2 * r2
@@ -95,7 +93,7 @@ def _cg_direction(beta, p, z):
 
 
 @njit(cache=True, parallel=True)
-def _cg_residual(b, q, r, held, normals, stick, part):
+def _cg_residual(b, q, r, held, normals, part):
     """r = S·b − q (q = S·A·x: the filtered residual) in one pass; returns b·b (summed over fixed chunks)."""
     n = len(held)
     for ch in prange((n + _CHUNK - 1) // _CHUNK):
@@ -103,7 +101,7 @@ def _cg_residual(b, q, r, held, normals, stick, part):
         for i in range(ch * _CHUNK, min(n, (ch + 1) * _CHUNK)):
             b0, b1, b2 = b[3 * i], b[3 * i + 1], b[3 * i + 2]
             acc += b0 * b0 + b1 * b1 + b2 * b2
-            f0, f1, f2 = _held_part(b0, b1, b2, held[i], normals, stick)
+            f0, f1, f2 = _held_part(b0, b1, b2, held[i], normals)
             r[3 * i], r[3 * i + 1], r[3 * i + 2] = f0 - q[3 * i], f1 - q[3 * i + 1], f2 - q[3 * i + 2]
         part[ch] = acc
     return _total(part)
@@ -118,13 +116,13 @@ def _total(part):
 
 
 @njit(cache=True)
-def block_pcg(bptr, bcol, blocks, b, x, pinv, rtol, max_iterations, ids, normals, stick):
+def block_pcg(bptr, bcol, blocks, b, x, pinv, rtol, max_iterations, ids, normals):
     """Block-Jacobi preconditioned CG on a 3×3 block-CSR matrix, filtered by contacts, in place.
 
     Baraff & Witkin's modified PCG (1998, §5.3): vertex ``ids[k]`` may not change its velocity
     along ``normals[k]`` from the value ``x`` holds on entry (the caller sets it to the prescribed
-    one) but moves freely in the tangent plane — or, if ``stick[k]``, may not change it at all
-    (static friction); no constraints if ``ids`` is empty. Residual and search directions are
+    one) but moves freely in the tangent plane (friction is a drag in the matrix); no constraints
+    if ``ids`` is empty. Residual and search directions are
     projected ("filtered") onto the free subspace, so A·x − b on exit is the constraints' reaction.
     Block storage has one column index per 3×3 block; each vertex's own 3×3 diagonal block,
     inverted, is the preconditioner (``pinv``, (N, 3, 3)). An iteration is three threaded passes
@@ -144,14 +142,14 @@ def block_pcg(bptr, bcol, blocks, b, x, pinv, rtol, max_iterations, ids, normals
     r = np.empty(n)
     q = np.empty(n)
     z = np.empty(n)
-    _cg_product(bptr, bcol, blocks, x, q, held, normals, stick, part)  # q = S·A·x
-    bnorm = math.sqrt(_cg_residual(b, q, r, held, normals, stick, part))  # r = S·b − q
+    _cg_product(bptr, bcol, blocks, x, q, held, normals, part)  # q = S·A·x
+    bnorm = math.sqrt(_cg_residual(b, q, r, held, normals, part))  # r = S·b − q
     if bnorm == 0.0:
         if len(ids) == 0:
             x[:] = 0.0
         return 0, True
     q[:] = 0.0
-    _cg_update(0.0, x, r, q, q, z, pinv, held, normals, stick, part, part2)  # z = filter(P·r)
+    _cg_update(0.0, x, r, q, q, z, pinv, held, normals, part, part2)  # z = filter(P·r)
     rz = _total(part)
     rr = _total(part2)
     p = z.copy()
@@ -159,12 +157,12 @@ def block_pcg(bptr, bcol, blocks, b, x, pinv, rtol, max_iterations, ids, normals
     for it in range(max_iterations):
         if math.sqrt(rr) <= target:
             return it, True
-        _cg_product(bptr, bcol, blocks, p, q, held, normals, stick, part)
+        _cg_product(bptr, bcol, blocks, p, q, held, normals, part)
         pq = _total(part)
         if pq <= 0.0:
             return it, False
         alpha = rz / pq
-        _cg_update(alpha, x, r, p, q, z, pinv, held, normals, stick, part, part2)
+        _cg_update(alpha, x, r, p, q, z, pinv, held, normals, part, part2)
         rz_new = _total(part)
         rr = _total(part2)
         beta = rz_new / rz

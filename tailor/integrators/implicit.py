@@ -28,29 +28,37 @@ log = logging.getLogger(__name__)
 
 @dataclass(slots=True)
 class _Held:
-    """The working set of held contacts of one step."""
+    """The working set of held contacts of one step.
+
+    ``force`` [N] is each contact's lagged normal force (0: none known), ``drag`` (K, 3, 3) and
+    ``push`` (K, 3) its regularised friction's terms in the system (:func:`_friction_terms`; zero
+    where it has none)."""
 
     ids: np.ndarray
     normals: np.ndarray
-    target: np.ndarray  # (K, 3) velocity each must end with along its held directions
-    stick: np.ndarray
+    target: np.ndarray  # (K, 3) velocity each must end with along its normal; its tangent part the body's
     friction: np.ndarray
+    force: np.ndarray
+    drag: np.ndarray
+    push: np.ndarray
 
     @classmethod
     def empty(cls):
-        return cls(np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.uint8), np.zeros(0))
+        return cls(np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0),
+                   np.zeros((0, 3, 3)), np.zeros((0, 3)))
 
     @classmethod
     def of(cls, c: Contacts, keep):
         k = int(keep.sum())
         n = np.asarray(c.normals, float)[keep]
-        stick = np.zeros(k, np.uint8) if c.stick is None else np.asarray(c.stick, np.uint8)[keep]
         vb = np.zeros((k, 3)) if c.body_velocity is None else np.asarray(c.body_velocity, float)[keep]
         # the target's normal part is the prescribed normal velocity; its tangent part the body's
         vn = np.asarray(c.normal_velocity, float)[keep]
         target = vb + (vn - np.einsum("ij,ij->i", vb, n))[:, None] * n
         mu = np.full(k, np.inf) if c.friction is None else np.asarray(c.friction, float)[keep]
-        return cls(np.ascontiguousarray(c.ids[keep], dtype=np.intp), np.ascontiguousarray(n), target, stick, mu)
+        force = np.zeros(k) if c.normal_force is None else np.asarray(c.normal_force, float)[keep]
+        return cls(np.ascontiguousarray(c.ids[keep], dtype=np.intp), np.ascontiguousarray(n), target, mu, force,
+                   np.zeros((k, 3, 3)), np.zeros((k, 3)))
 
     @classmethod
     def given(cls, contacts: Contacts | None, model):
@@ -62,13 +70,39 @@ class _Held:
     def __len__(self):
         return len(self.ids)
 
+    def _fields(self):
+        return (self.ids, self.normals, self.target, self.friction, self.force, self.drag, self.push)
+
     def take(self, sel):
-        return _Held(self.ids[sel], self.normals[sel], self.target[sel], self.stick[sel], self.friction[sel])
+        return _Held(*(a[sel] for a in self._fields()))
 
     def join(self, other):
-        return _Held(*(np.concatenate([a, b]) for a, b in ((self.ids, other.ids), (self.normals, other.normals),
-                                                          (self.target, other.target), (self.stick, other.stick),
-                                                          (self.friction, other.friction))))
+        return _Held(*(np.concatenate([a, b]) for a, b in zip(self._fields(), other._fields())))
+
+
+def _friction_terms(held: _Held, v, f, mass, dt, stick_speed):
+    """(Δt·c·P, −Δt·c·P·u) of each held contact: Coulomb friction as a drag c on its tangent
+    velocity u relative to the body (P: the projection onto the tangent plane).
+
+    Eq. 14 removes at most μ·|Δv_n| of the tangent velocity a step would have had; as a force with
+    the lagged normal force F, at most the budget b = μF·Δt/m. With u* = u + Δt·f_t/m the tangent
+    velocity the step would reach without friction, Coulomb ends it at u*·(1 − b/|u*|) when
+    |u*| > b, at rest otherwise; the implicit drag c = μF / max(|u*| − b, ε) ends it there too,
+    (u* / (1 + Δt·c/m)), for ε = ``stick_speed``: held, it creeps at most ε. The drag is in the
+    matrix (Baraff & Witkin 1998's implicit damping; the lagged, regularised friction of
+    incremental potential contact), so no contact switches between stuck and sliding within a
+    step, and, a drag, it never reverses a contact's slide. Contacts with no known force, or no
+    finite μ, get none."""
+    n = held.normals
+    ids = held.ids
+    u = v.reshape(-1, 3)[ids] - held.target
+    u -= np.einsum("ij,ij->i", u, n)[:, None] * n
+    free = u + dt * f.reshape(-1, 3)[ids] / mass[ids, None]
+    free -= np.einsum("ij,ij->i", free, n)[:, None] * n
+    limit = np.where(np.isfinite(held.friction), held.friction, 0.0) * np.maximum(held.force, 0.0)
+    c = limit / np.maximum(np.linalg.norm(free, axis=1) - limit * dt / mass[ids], stick_speed)
+    drag = (dt * c)[:, None, None] * (np.eye(3)[None] - n[:, :, None] * n[:, None, :])
+    return drag, -(dt * c)[:, None] * u
 
 
 @dataclass(slots=True)
@@ -83,6 +117,16 @@ class _System:
     free: np.ndarray  # (3N,) dofs not pinned
     rhs0: np.ndarray  # the right-hand side as assembled: before pinned rows were cleared and friction added
     parts: list  # the matrix's independent parts (BlockPart), each solved alone
+    diagonal: np.ndarray  # (N,) index of each vertex's diagonal block
+
+    def rub(self, held: _Held, sign: float = 1.0) -> None:
+        """Add (``sign`` −1: take out) the held contacts' friction terms to their rows."""
+        if not len(held):
+            return
+        at = self.diagonal[held.ids]
+        self.blocks[at] += sign * held.drag
+        self.rhs.reshape(-1, 3)[held.ids] += sign * held.push
+        self.pinv[held.ids] = inverse_3x3(self.blocks[at])
 
     def reactions(self, dv, held: _Held):
         """(K, 3) impulse [N·s] the held contacts exert: the residual A·Δv − b at their dofs."""
@@ -106,10 +150,10 @@ def _support(model, system: _System, dv, held: _Held):
     base = system.rhs0.reshape(-1, 3)
     out = np.zeros_like(base)
     out[pinned] = -base[pinned]
-    if len(held):
+    if len(held):  # the friction drag is in the matrix: its part of A·Δv is the cloth's, not the contact's
         r = np.empty((len(held), 3))
         bsr_rows(system.bptr, system.bcol, system.blocks, dv, held.ids, r)
-        out[held.ids] += r - base[held.ids]
+        out[held.ids] += r - base[held.ids] - np.einsum("kij,kj->ki", held.drag, dv.reshape(-1, 3)[held.ids])
     return out
 
 
@@ -131,23 +175,28 @@ class ImplicitEuler(IntegratorBase):
         deep (Baraff & Witkin 1998's adaptive step size). One linearised step rotates an edge
         about a held neighbour along the tangent, lengthening it by √(1 + θ²) for a rotation
         θ = |Δv|·Δt / length; halving the step quarters that.
+    stick_speed : float
+        [m/s] Below this tangent speed relative to the body a contact's friction is a viscous
+        drag that holds it (:func:`_friction_terms`); above it, Coulomb's sliding friction.
 
     Contacts
     --------
     ``contacts`` given to :meth:`step` are held by the solve itself (filtered CG): the cloth's
     stiffness then knows about the support within the step, instead of the support being
-    imposed after a step that ignored it. Contacts the body would have to pull on are let go,
-    stuck ones pulled harder than friction allows slide at the Coulomb limit (friction inside
-    the solve, so the neighbours feel it), and ``predict`` adds the vertices the solved step
-    would bring onto the body; the step is solved again, at most :attr:`contact_passes` times.
+    imposed after a step that ignored it. Their friction is a drag in the matrix
+    (:func:`_friction_terms`), so the neighbours feel it and no contact changes between stuck and
+    sliding within the step. Contacts the body would have to pull on are let go, and ``predict``
+    adds the vertices the solved step would bring onto the body; the step is solved again after
+    either, at most :attr:`contact_passes` times.
     """
 
     name = "implicit"
     explicit = False
 
     def __init__(self, tolerance: float = 1e-5, max_iterations: int = 2000, max_halvings: int = 3,
-                 max_stretch_change: float = 0.3):
+                 max_stretch_change: float = 0.3, stick_speed: float = 5e-4):
         super().__init__()
+        self.stick_speed = stick_speed
         self.max_iterations = max_iterations
         self.max_halvings = max_halvings
         self.contact_passes = 4
@@ -191,7 +240,7 @@ class ImplicitEuler(IntegratorBase):
             drag[model.vertex_pinned] = 0.0
             pattern.add_to_diagonal(blocks, dt * drag)
         pinv = inverse_3x3(pattern.diagonal_blocks(blocks))
-        return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free, rhs0, pattern.parts)
+        return _System(pattern.block_indptr, pattern.block_cols, blocks, pinv, rhs, free, rhs0, pattern.parts, diagonal)
 
     @staticmethod
     def _first_guess(model, system: _System, dt, f):
@@ -218,12 +267,11 @@ class ImplicitEuler(IntegratorBase):
         if len(ids):
             dvk = dv.reshape(-1, 3)[ids]
             end = v.reshape(-1, 3)[ids] + dvk
-            normal_fix = np.einsum("ij,ij->i", held.target - end, n)[:, None] * n
-            dvk += np.where(held.stick[:, None] > 0, held.target - end, normal_fix)
+            dvk += np.einsum("ij,ij->i", held.target - end, n)[:, None] * n
             dv.reshape(-1, 3)[ids] = dvk
         if len(system.parts) < 2:
             return block_pcg(system.bptr, system.bcol, system.blocks, system.rhs, dv, system.pinv, self.settings.tolerance,
-                             self.max_iterations, ids, n, held.stick)
+                             self.max_iterations, ids, n)
         iterations, converged = 0, True
         for part in system.parts:
             its, ok = self._solve_part(system, part, dv, held)
@@ -236,42 +284,20 @@ class ImplicitEuler(IntegratorBase):
         mine = (held.ids >= lo) & (held.ids < hi)
         return block_pcg(part.bptr, part.bcol, system.blocks[part.first:part.last], system.rhs[3 * lo:3 * hi],
                          dv[3 * lo:3 * hi], system.pinv[lo:hi], self.settings.tolerance, self.max_iterations,
-                         held.ids[mine] - lo, np.ascontiguousarray(held.normals[mine]), held.stick[mine])
+                         held.ids[mine] - lo, np.ascontiguousarray(held.normals[mine]))
 
     def _release_pulled(self, system, dv, held, let_go):
         """Let go the held contacts the body would have to pull on (the cloth leaves the body there).
 
-        Returns (held, let_go, the others' reactions, their normal reactions, whether any was let go):
-        the reactions are the solve's before the release, which the next solve (after friction and
-        landings are judged on them too) brings up to date."""
-        r = system.reactions(dv, held)
-        rn = np.einsum("ij,ij->i", r, held.normals)
+        Returns (held, let_go, whether any was let go)."""
+        rn = np.einsum("ij,ij->i", system.reactions(dv, held), held.normals)
         pulled = rn < 0.0
         if not pulled.any():
-            return held, let_go, r, rn, False
+            return held, let_go, False
         let_go = np.concatenate([let_go, held.ids[pulled]])
+        system.rub(held.take(pulled), -1.0)  # a contact let go has no friction either
         self.counters.released += int(pulled.sum())
-        return held.take(~pulled), let_go, r[~pulled], rn[~pulled], True
-
-    def _slip(self, system, held, r, rn) -> bool:
-        """Stuck contacts whose reaction leaves the Coulomb cone slide, keeping the friction they
-        had at its limit (kinetic friction inside the solve); whether any did."""
-        rn = np.maximum(rn, 0.0)  # a contact the new solve pulls on is let go next pass
-        tangential = np.linalg.norm(r - rn[:, None] * held.normals, axis=1)
-        limit = np.zeros_like(rn)  # μ may be inf (no sliding): never multiplied by rn = 0
-        pressed = rn > 0.0
-        limit[pressed] = held.friction[pressed] * rn[pressed]
-        slip = (held.stick > 0) & (tangential > limit)
-        if not slip.any():
-            return False
-        # a tangential reaction of round-off size has no direction to drag in
-        rt = r - rn[:, None] * held.normals
-        drag = np.where(tangential > 1e-12 * (rn + 1e-30), limit / np.maximum(tangential, 1e-300), 0.0)
-        drag = drag[slip, None] * rt[slip]
-        np.add.at(system.rhs.reshape(-1, 3), held.ids[slip], drag)
-        held.stick[slip] = 0
-        self.counters.slipped += int(slip.sum())
-        return True
+        return held.take(~pulled), let_go, True
 
     def _new_landings(self, model, state, dt, dv, held, let_go, predict):
         """(contacts, which of them are new): those the solved step would make, less the ones held, the
@@ -294,8 +320,8 @@ class ImplicitEuler(IntegratorBase):
         return held.join(_Held.of(more, new)), True
 
     def _active_set(self, model, state, dt, system, dv, held, predict):
-        """A few passes at most: release pulled contacts, slide slipping ones, hold landing ones,
-        solving again after each change. Returns (held, iterations, converged, settled: no vertex
+        """A few passes at most: release pulled contacts, hold landing ones, solving again after
+        each change. Returns (held, iterations, converged, settled: no vertex
         still landing after the last pass)."""
         v = state.v.reshape(-1)
         let_go = np.zeros(0, np.intp)
@@ -303,8 +329,7 @@ class ImplicitEuler(IntegratorBase):
         for _ in range(self.contact_passes):
             changed = False
             if len(held):
-                held, let_go, r, rn, changed = self._release_pulled(system, dv, held, let_go)
-                changed = self._slip(system, held, r, rn) or changed
+                held, let_go, changed = self._release_pulled(system, dv, held, let_go)
             if predict is not None:
                 held, landed = self._landing(model, state, dt, dv, held, let_go, predict)
                 changed = changed or landed
@@ -321,9 +346,10 @@ class ImplicitEuler(IntegratorBase):
         self._warm = None
         half = self._step(model, state, 0.5 * dt, forces, contacts, predict, depth + 1)
         end = self._step(model, half.state, 0.5 * dt, forces, contacts, predict, depth + 1)
-        if half.support is None:
-            return end
-        return replace(end, support=half.support if end.support is None else half.support + end.support)
+        # the second half's normal impulses at the whole step's rate: over dt they give its force
+        impulses = None if end.impulses is None else 2.0 * end.impulses
+        support = end.support if half.support is None else half.support if end.support is None else half.support + end.support
+        return replace(end, impulses=impulses, support=support)
 
     def _overstretches(self, model, state, x_end) -> bool:
         """Whether ending at ``x_end`` stretches a triangle more than ``max_stretch_change`` this step."""
@@ -350,6 +376,8 @@ class ImplicitEuler(IntegratorBase):
         else:
             dv = self._first_guess(model, system, dt, f)
         held = _Held.given(contacts, model)
+        held.drag, held.push = _friction_terms(held, state.v, f, model.vertex_mass, dt, self.stick_speed)
+        system.rub(held)
         iterations, converged = self._solve(system, dv, state.v.reshape(-1), held)
         settled = True
         if converged:
