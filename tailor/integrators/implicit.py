@@ -176,8 +176,8 @@ class ImplicitEuler(IntegratorBase):
         about a held neighbour along the tangent, lengthening it by √(1 + θ²) for a rotation
         θ = |Δv|·Δt / length; halving the step quarters that.
     stick_speed : float
-        [m/s] Below this tangent speed relative to the body a contact's friction is a viscous
-        drag that holds it (:func:`_friction_terms`); above it, Coulomb's sliding friction.
+        [m/s] The slowest slide the friction's drag allows (:func:`_friction_terms`): a contact
+        that friction can hold creeps relative to the body at most this fast.
 
     Contacts
     --------
@@ -321,8 +321,8 @@ class ImplicitEuler(IntegratorBase):
 
     def _active_set(self, model, state, dt, system, dv, held, predict):
         """A few passes at most: release pulled contacts, hold landing ones, solving again after
-        each change. Returns (held, iterations, converged, settled: no vertex
-        still landing after the last pass)."""
+        each change. Returns (held, iterations, converged, settled: no vertex still landing after
+        the last pass)."""
         v = state.v.reshape(-1)
         let_go = np.zeros(0, np.intp)
         iterations, converged = 0, True
