@@ -115,9 +115,7 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     still = settle = None  # explicit integrators keep Eq. 24's step
     if not integ.explicit:
         still = q.garment_step(opts.resolution)
-        # quasi-static: the coarse step at any resolution (the equilibrium does not depend on it; the
-        # stretch limit halves the steps that would carry a fine mesh's triangles too far)
-        settle = max(still, SETTLE_QUALITY.step)
+        settle = max(still, SETTLE_QUALITY.garment_step(opts.resolution))  # quasi-static: the coarse step
     timeline = Timeline(body, still, settle_step=settle)
     landmarks = measure_body(body, timeline.pose)
     pattern = ease_layers(pattern, landmarks, layer_spacing(fabrics))  # an outfit's outer loops round the inner ones
