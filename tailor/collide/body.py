@@ -438,9 +438,9 @@ class BodyCollider:
         # resting (not leaving) and not held by a pull last step: held during the next one
         rest = (np.einsum("ij,ij->i", new_rel, n) <= 1e-9) & (held >= 0)
         mu = np.broadcast_to(mu, hit.shape)
-        push = (model.vertex_mass[hit] * (np.maximum(held, 0.0) + dv_n) / dt)[rest]  # [N]: the solve's and this response's
+        pressing = (model.vertex_mass[hit] * (np.maximum(held, 0.0) + dv_n) / dt)[rest]  # [N]: the solve's and this response's
         return Contacts(hit[rest], n[rest], np.einsum("ij,ij->i", vb[rest], n[rest]), model.vertex_count,
-                        body_velocity=vb[rest], friction=mu[rest], normal_force=push)
+                        body_velocity=vb[rest], friction=mu[rest], normal_force=pressing)
 
 
 def _recent(store: dict, key, keep: int, make):
