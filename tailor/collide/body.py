@@ -14,6 +14,7 @@ from .closest import nearest_into
 from .contacts import NO_CONTACTS, Contacts
 from .drift import BodyDrift
 from .inside import InsideTest
+from .memory import KeptCandidates, LandingTests, LastResponse, per_vertex, same_positions
 
 __all__ = ["BodyCollider", "body_gap", "BODY_SPAN"]
 
@@ -21,94 +22,10 @@ BODY_SPAN = 16
 """Body frames one FCL broad phase of the body serves (:meth:`BodyCollider._body`): a walk builds its
 boxes, and learns which of them lie near each cube of space, once per span instead of every frame."""
 
-
-def _same(a, b) -> bool:
-    """Whether two arrays of body positions are the same (a still body is handed over again and again)."""
-    return a is b or np.array_equal(a, b)
-
-
-class _Kept:
-    """The body collider's cached candidates: per vertex the triangles found within the margin (the
-    first ``count[i]`` of row ``i`` of ``slots``: a vertex asked again rewrites its own row only), where
-    the vertex was when its budget was last counted (``ref``) and how much of half the margin it has
-    left there (``slack`` [m]), and the body frame they were counted on."""
-
-    def __init__(self, frame, x):
-        n = len(x)
-        self.frame, self.ref, self.slack = frame, x.copy(), np.zeros(n)
-        self.slots = np.zeros((n, 0), np.int32)
-        self.count = np.zeros(n, np.int64)
-        self._lo = np.zeros(n, np.int64)
-
-    def spans(self):
-        """(lo, hi, tri): vertex i's candidate triangles are ``tri[lo[i]:hi[i]]``."""
-        return self._lo, self._lo + self.count, self.slots.reshape(-1)
-
-    def spend(self, drift, x, frame) -> None:
-        """The body frame changed to ``frame`` with the vertices at ``x``: ``drift`` (per vertex) is spent."""
-        self.slack = self.slack - drift
-        self.ref = x.copy()
-        self.frame = frame
-
-    def renew(self, ids, x, keys, face_count: int, slack) -> None:
-        """Vertices ``ids`` (sorted) were asked about again at ``x``: their whole budget ``slack`` back,
-        and as their candidates the triangles of ``keys`` (sorted ``vertex · F + triangle``)."""
-        self.ref[ids] = x[ids]
-        self.slack[ids] = slack
-        vertex, tri = keys // face_count, keys % face_count
-        start = np.searchsorted(vertex, ids)
-        count = np.searchsorted(vertex, ids, side="right") - start
-        width = int(count.max(initial=0))
-        if width > self.slots.shape[1]:  # rows widened (a quarter more, so that this is rare)
-            grown = np.zeros((len(self.count), max(width, (5 * self.slots.shape[1]) // 4)), np.int32)
-            grown[:, :self.slots.shape[1]] = self.slots
-            self.slots = grown
-            self._lo = np.arange(len(self.count), dtype=np.int64) * grown.shape[1]
-        self.count[ids] = count
-        self.slots[vertex, np.arange(len(keys)) - np.repeat(start, count)] = tri
-
-
-class _Tested:
-    """The landing tests against the body standing at ``body_x`` (a step's end, the same for each of
-    the step's contact passes): per vertex where it was last tested and a lower bound of its distance
-    from the body there (−inf: never tested). A vertex at least ``bound`` away cannot have come within
-    the thickness unless it has moved more than ``bound`` less the thickness since."""
-
-    def __init__(self, body_x, n: int):
-        self.body_x = body_x
-        self.x = np.zeros((n, 3))
-        self.bound = np.full(n, -np.inf)
-
-    def unclear(self, rows, x, thickness) -> np.ndarray:
-        """Those of ``rows`` that may be within ``thickness`` at ``x``."""
-        moved = np.linalg.norm(x[rows] - self.x[rows], axis=1)
-        return rows[self.bound[rows] - moved <= _at(thickness, rows)]
-
-    def found(self, rows, x, dist, tri, half) -> None:
-        """``rows`` tested at ``x``: ``dist``, ``tri`` as :meth:`BodyCollider._closest` gives them (a
-        distance is exact within ``half`` the margin, where every triangle is a candidate; none found
-        or a farther one means at least that)."""
-        self.x[rows] = x[rows]
-        self.bound[rows] = np.minimum(np.where(tri[rows] >= 0, dist[rows], np.inf), half)
-
-
-class _Seen:
-    """The cloth at the last response: positions ``x``, lower bounds of their distances from the body
-    (``bound`` [m], at most ``reach``; negative inside), of how far outside it they surely were
-    (``outside`` [m], 0 where the side is not certain), and the body's positions then; the body's
-    drift since within ``reach``, for the last body asked about."""
-
-    def __init__(self, x, bound, body, outside, reach: float):
-        self.x, self.bound, self.body, self.outside, self.reach = x, bound, body, outside, reach
-        self._drift = None  # (body positions, BodyDrift to them)
-
-    def drift(self, body_x, faces) -> BodyDrift:
-        """The body's :class:`BodyDrift` from then to ``body_x`` (the same positions asked again: the same one)."""
-        d = self._drift
-        if d is None or not _same(d[0], body_x):
-            d = self._drift = (body_x.copy(), BodyDrift(self.body, body_x, faces, self.reach))
-        return d[1]
-
+SPEND = 0.5
+"""Share of the margin a cloth vertex may move (relative to the body near it) before it is asked
+again (:meth:`BodyCollider.candidates`); the rest, :attr:`BodyCollider.sure`, is where every body
+triangle is among its candidates, so a distance found there is exact."""
 
 class BodyCollider:
     """Cloth–body contact (Carignan Eq. 9–14) with FCL as the broad phase.
@@ -116,8 +33,8 @@ class BodyCollider:
     FCL finds the body triangles within ``margin`` of every cloth vertex, by clusters: boxes
     round nearby cloth vertices against boxes round nearby body triangles
     (:func:`clustered_query`, built once per :data:`BODY_SPAN` body frames). Those candidates
-    are kept while no cloth vertex has moved more than half the margin and the body frame is the
-    same; each step a compiled narrow phase finds, on the body as it is at that instant, the
+    are kept while no cloth vertex has moved more than its budget (a share of the margin, :data:`SPEND`)
+    relative to the body near it; each step a compiled narrow phase finds, on the body as it is at that instant, the
     closest point, its barycentric coordinates and the outward normal.
 
     Parameters
@@ -125,20 +42,36 @@ class BodyCollider:
     frames : (T, N, 3) body positions [m]; faces : (F, 3)
     margin : float
         Query radius [m]; must exceed the distance a cloth vertex moves between queries.
+    spend : float
+        Share of the margin a vertex may move before it is asked again (:data:`SPEND`).
+
+    Attributes
+    ----------
+    budget : float
+        How far [m] a vertex may move relative to the body near it before it is asked again.
+    sure : float
+        The margin less the budget [m]: every body triangle within it of a vertex is a candidate,
+        so distances (and sides) found within it are exact. A step must not carry the body further
+        than this through the cloth (:class:`~tailor.dress.timeline.Timeline`): a vertex that crossed
+        the surface is then found inside within it, and seen to have crossed.
     """
 
-    def __init__(self, frames, faces, *, margin: float = 0.02):
+    def __init__(self, frames, faces, *, margin: float = 0.02, spend: float = SPEND):
+        if not 0.0 < spend < 1.0:
+            raise ValueError(f"spend must lie strictly between 0 and 1 (a share of the margin), got {spend!r}")
         self.frames = np.asarray(frames, float)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.margin = float(margin)
+        self.budget = spend * self.margin
+        self.sure = self.margin - self.budget
         self._boxes = {}  # span of body frames (frame // BODY_SPAN) → its broad phase
         self._geometry = {}  # body frame → its triangles (TriangleGeometry)
-        self._cache: _Kept | None = None  # each vertex's candidates and what is left of its margin
+        self._cache: KeptCandidates | None = None  # each vertex's candidates and what is left of its margin
         self._drifts = {}  # (frame, frame) → the body's BodyDrift between them
         self._previous = None  # signed distance of every vertex after the last response
-        self._seen: _Seen | None = None  # where the cloth and the body were at the last response
+        self._seen: LastResponse | None = None  # where the cloth and the body were at the last response
         self._inside_test = None  # (body positions, their InsideTest)
-        self._tested: _Tested | None = None  # the landing tests against the body where it stands now
+        self._tested: LandingTests | None = None  # the landing tests against the body where it stands now
         self.deepest = 0.0  # deepest penetration any response found [m]
         self.queries = 0
         self.queried_points = 0
@@ -179,7 +112,7 @@ class BodyCollider:
         """(lo, hi, tri): the body triangles within ``margin`` of vertex i are ``tri[lo[i]:hi[i]]`` (FCL broad phase).
 
         With ``cache`` each vertex keeps its answer while it is certain to hold every triangle
-        within half the margin: a vertex asked about has half the margin to spend, and spends what
+        within :attr:`sure`: a vertex asked about has :attr:`budget` to spend, and spends what
         it moves and, when the body frame changes, how much closer the body near it came relative
         to it (:class:`~tailor.collide.drift.BodyDrift`; the trunk under a shirt moves with the
         shirt, a swinging arm does not). Only the vertices that spent it are asked again (sewing
@@ -195,8 +128,8 @@ class BodyCollider:
             keys = self._query(x, frame, every)
             if not cache:
                 return self._spans(keys, len(x))
-            c = self._cache = _Kept(frame, x)
-            c.renew(every, x, keys, len(self.faces), 0.5 * self.margin)
+            c = self._cache = KeptCandidates(frame, x)
+            c.renew(every, x, keys, len(self.faces), self.budget)
             return c.spans()
         if c.frame != frame:
             c.spend(self._drift(c.frame, frame).relative(x, x - c.ref), x, frame)
@@ -205,7 +138,7 @@ class BodyCollider:
         travel, budget = np.einsum("ij,ij->i", step, step), np.maximum(c.slack[ids], 0.0) ** 2
         if (travel >= budget).any():  # a query is made: those three quarters through their budget too (they would be next)
             moved = ids[travel >= 0.5625 * budget]
-            c.renew(moved, x, self._query(x[moved], frame, moved), len(self.faces), 0.5 * self.margin)
+            c.renew(moved, x, self._query(x[moved], frame, moved), len(self.faces), self.budget)
         return c.spans()
 
     def _drift(self, a: int, b: int):
@@ -216,7 +149,7 @@ class BodyCollider:
         """Whether each point lies inside the closed body at ``body_x`` (:class:`InsideTest`, binned once
         per body position: a still body is asked many times over)."""
         kept = self._inside_test
-        if kept is None or not _same(kept[0], body_x):
+        if kept is None or not same_positions(kept[0], body_x):
             kept = self._inside_test = (np.array(body_x, float), InsideTest(body_x, self.faces))
         return kept[1](points)
 
@@ -256,18 +189,18 @@ class BodyCollider:
         return self._confirm_deep(x, found, body_x) if cache else found  # uncached: complete within the margin
 
     def _confirm_deep(self, x, found, body_x):
-        """``found`` with the vertices read deeper than half the margin checked against the closed surface.
+        """``found`` with the vertices read deeper than :attr:`sure` checked against the closed surface.
 
-        The cached candidates hold every triangle within half the margin of a vertex, but only
-        some of those farther off. Beyond half the margin the closest of them is still farther than
-        half the margin (the true distance is too), but its side is the vote of whichever faces
+        The cached candidates hold every triangle within :attr:`sure` of a vertex, but only
+        some of those farther off. Beyond it the closest of them is still farther than
+        :attr:`sure` (the true distance is too), but its side is the vote of whichever faces
         happened to be cached (a vertex outside a cube's corner, level with one face, can read
         inside from that face alone and be thrown off). Such vertices are tested
         against the closed surface (:func:`points_inside`, as :meth:`rescue` does: the body must be
         watertight for either); those outside are out of reach.
         """
         dist, tri, bary, normal = found
-        deep = np.flatnonzero((tri >= 0) & (dist < -0.5 * self.margin))
+        deep = np.flatnonzero((tri >= 0) & (dist < -self.sure))
         if len(deep):
             out = deep[~self._inside(x[deep], body_x)]
             tri[out], dist[out] = -1, np.inf
@@ -276,7 +209,7 @@ class BodyCollider:
     def rescue(self, model, state, body_x, body_v, frame: int, *, thickness, reach: float = 0.15) -> int:
         """Return cloth vertices trapped inside the body to its surface; how many were moved.
 
-        :meth:`respond` trusts only contacts within half the margin, or vertices it saw cross,
+        :meth:`respond` trusts only contacts within :attr:`sure`, or vertices it saw cross,
         so a vertex that arrives deep inside without crossing (a merged seam vertex at the
         centroid of its partners round a shoulder, or one squeezed through a crease) stays
         there. Here every vertex not surely outside (:meth:`_surely_outside`) is tested against the
@@ -291,7 +224,7 @@ class BodyCollider:
         state.x[ids] = out
         state.v[ids] = (body_v[self.faces[tri]] * bary[:, :, None]).sum(axis=1)
         if self._previous is not None and len(self._previous) == len(state.x):
-            self._previous[ids] = _at(thickness, ids)
+            self._previous[ids] = per_vertex(thickness, ids)
         return len(ids)
 
     def push_out(self, points, body_x, frame: int, *, clearance: float, reach: float = 0.15, skip=None):
@@ -306,7 +239,7 @@ class BodyCollider:
         keys = self._query(points[inside], frame, np.arange(len(inside)), radius=reach)
         dist, tri, bary, normal = self._closest(points[inside], self._spans(keys, len(inside)), body_x)
         ok = (tri >= 0) & (dist < 0.0)
-        out = points[inside[ok]] + (_at(clearance, inside[ok]) - dist[ok])[:, None] * normal[ok]
+        out = points[inside[ok]] + (per_vertex(clearance, inside[ok]) - dist[ok])[:, None] * normal[ok]
         return inside[ok], tri[ok], bary[ok], out
 
     def landing(self, model, x_end, v_end, dt, body_x, body_v, frame: int, *, thickness, skip=None):
@@ -325,12 +258,12 @@ class BodyCollider:
             test[skip] = False
         rows = np.flatnonzero(test & ~self._out_of_reach(x_end, body_x, thickness))
         tested = self._tested
-        if tested is None or len(tested.x) != len(x_end) or not _same(tested.body_x, body_x):
-            tested = self._tested = _Tested(body_x, len(x_end))
+        if tested is None or len(tested.x) != len(x_end) or not same_positions(tested.body_x, body_x):
+            tested = self._tested = LandingTests(body_x, len(x_end))
         rows = tested.unclear(rows, x_end, thickness)
         dist, tri, bary, normal = self._confirm_deep(x_end, self._closest(x_end, self.candidates(x_end, frame, rows=rows), body_x, rows),
                                                      body_x)
-        tested.found(rows, x_end, dist, tri, 0.5 * self.margin)
+        tested.found(rows, x_end, dist, tri, self.sure)
         close = np.flatnonzero((tri >= 0) & (dist < thickness) & ~model.vertex_pinned)
         if not len(close):
             return Contacts(np.zeros(0, np.intp), np.zeros((0, 3)), np.zeros(0), model.vertex_count)
@@ -338,9 +271,9 @@ class BodyCollider:
         vb = np.einsum("kij,ki->kj", body_v[self.faces[tri[close]]], bary[close])
         vn = np.einsum("ij,ij->i", v_end[close] - vb, n)
         start = dist[close] - dt * vn  # where it started, relative to the body
-        ok = (vn < 0) & (start > -0.5 * self.margin)
+        ok = (vn < 0) & (start > -self.sure)
         close, n, vb, start = close[ok], n[ok], vb[ok], start[ok]
-        return Contacts(close, n, np.einsum("ij,ij->i", vb, n) - np.maximum(start - _at(thickness, close), 0.0) / dt,
+        return Contacts(close, n, np.einsum("ij,ij->i", vb, n) - np.maximum(start - per_vertex(thickness, close), 0.0) / dt,
                         model.vertex_count)
 
     def _out_of_reach(self, x, body_x, thickness) -> np.ndarray:
@@ -354,7 +287,7 @@ class BodyCollider:
 
     def _surely_outside(self, x, body_x) -> np.ndarray:
         """Vertices at ``x`` that cannot have entered the body at ``body_x``: found outside at the last
-        response, within half the margin (where the side is certain), by more than they have moved
+        response, within :attr:`sure` (where the side is certain), by more than they have moved
         relative to the body near them since (to reach its inside they must cross its surface)."""
         seen = self._seen
         if seen is None or len(seen.x) != len(x):
@@ -364,23 +297,23 @@ class BodyCollider:
     def _hits(self, x, body_x, frame, thickness):
         """The vertices to respond to: (hit ids, dist, tri, bary, normal) of all vertices.
 
-        A vertex found deeper than half the margin either crossed the surface this step (it was
+        A vertex found deeper than :attr:`sure` either crossed the surface this step (it was
         outside before: push it back) or lies near the far side of a thin or concave part (armpit,
         crotch) where the closest triangle is not the one it entered by: those are left. A resting
         band above the thickness keeps resting contact from flickering on and off.
         """
         dist, tri, bary, normal = self.nearest(x, body_x, frame)
-        # the cached candidates hold every triangle within margin/2: a distance found is exact up to
-        # there, and none found (or a farther one) means at least margin/2
-        half = 0.5 * self.margin
-        self._seen = _Seen(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), half), body_x,
+        # the cached candidates hold every triangle within ``sure``: a distance found is exact up to
+        # there, and none found (or a farther one) means at least that
+        half = self.sure
+        self._seen = LastResponse(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), half), body_x,
                            np.where((tri >= 0) & (dist > 0.0) & (dist < half), dist, 0.0), half)
         prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
         crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
-        plausible = (dist > -0.5 * self.margin) | crossed
+        plausible = (dist > -half) | crossed
         hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & plausible)
         self._previous = np.where(tri >= 0, dist, np.inf)
-        self._previous[hit] = _at(thickness, hit)  # pushed back out by the response
+        self._previous[hit] = per_vertex(thickness, hit)  # pushed back out by the response
         return hit, dist, tri, bary, normal
 
     def respond(self, model, state, dt, body_x, body_v, frame: int, *, thickness, friction,
@@ -406,7 +339,7 @@ class BodyCollider:
         n = normal[hit]
         movable = ~model.vertex_pinned[hit]
         hit, n, vb = hit[movable], n[movable], vb[movable]
-        thickness = _at(thickness, hit)
+        thickness = per_vertex(thickness, hit)
         rel = state.v[hit] - vb  # Eq. 9
         vn = np.einsum("ij,ij->i", rel, n)  # Eq. 10
         # a vertex that started the step above the thickness falls until it lands on it (its
@@ -451,12 +384,6 @@ def _recent(store: dict, key, keep: int, make):
             store.pop(next(iter(store)))
         store[key] = make()
     return store[key]
-
-
-def _at(thickness, ids):
-    """``thickness`` [m] of the vertices ``ids``: one for all, or each vertex's own ((N,) array: an
-    outfit's garments, each kept its layers out)."""
-    return thickness if np.ndim(thickness) == 0 else np.asarray(thickness)[ids]
 
 
 def body_gap(x, body_x, body_faces):

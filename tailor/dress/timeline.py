@@ -5,7 +5,8 @@ A moving body with a neutral pose (:attr:`~tailor.body.Body.rest`, as the shippe
 dressed in that pose and then moves into its first frame at :data:`~.options.TRANSITION_SPEED`
 (along key poses :data:`~.options.TRANSITION_KEYS_PER_S` a second), so panels are never placed round a
 leg in mid-stride. Each step while the body moves carries no body point that can reach the cloth
-within the frame more than half the contact margin relative to the cloth nearest it (the feet do not
+within the frame further relative to the cloth nearest it than the body collider's sure radius (where
+every body triangle near a vertex is its candidate: half the contact margin by default; the feet do not
 shorten a T-shirt's steps, nor the legs those of trousers swinging with them).
 """
 
@@ -103,6 +104,7 @@ class Timeline:
         self.steps_used: list = []
         self._near = None
         self.margin = 0.0
+        self.travel = 0.0  # [m] how far a step may carry a body point relative to the cloth (follow_collider)
         self.max_speed = self._max_speed()
 
     @property
@@ -122,9 +124,11 @@ class Timeline:
         """Frame 0 of the motion is at ``t`` [s]."""
         self.motion_start = t
 
-    def follow_collider(self, margin: float) -> None:
-        """The collider's margin is known: the step rule of a moving body uses it."""
-        self.margin = margin
+    def follow_collider(self, margin: float, travel: float) -> None:
+        """The body collider's ``margin`` [m] and how far [m] a step may carry the body through the
+        cloth (its :attr:`~tailor.collide.body.BodyCollider.sure` radius): the step rule of a moving
+        body uses them."""
+        self.margin, self.travel = margin, travel
         if self.moving:
             self._near = NearBodySpeed(self.body, self.pose if self.keys else None, margin, self.transition_s)
 
@@ -154,10 +158,10 @@ class Timeline:
 
     @property
     def motion_step(self) -> float | None:
-        """The step no body point anywhere can travel more than half the margin in (None: explicit)."""
+        """The step no body point anywhere can travel more than :attr:`travel` in (None: explicit)."""
         if self.still_step is None or self.max_speed <= 0:
             return self.still_step
-        return min(self.still_step, 0.5 * self.margin / self.max_speed)
+        return min(self.still_step, self.travel / self.max_speed)
 
     def moving_step(self, state, duration: float) -> float | None:
         """The step for the next ``duration`` s while the body moves: only body points near the cloth
@@ -171,6 +175,6 @@ class Timeline:
         start = self.motion_start
         span = None if start is None else (state.t - start, state.t - start + duration)
         fastest = self._near(state.x, state.v, bx, duration, span)
-        dt = min(self.still_step, 0.5 * self.margin / fastest) if fastest > 0 else self.still_step
+        dt = min(self.still_step, self.travel / fastest) if fastest > 0 else self.still_step
         self.steps_used.append(dt)
         return dt

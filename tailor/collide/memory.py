@@ -1,0 +1,104 @@
+"""What the body collider remembers per cloth vertex between steps (:class:`~.body.BodyCollider`):
+its cached candidates and budget, the landing tests of a step, and the cloth at the last response."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .drift import BodyDrift
+
+__all__ = ["KeptCandidates", "LandingTests", "LastResponse", "same_positions", "per_vertex"]
+
+
+def same_positions(a, b) -> bool:
+    """Whether two arrays of body positions are the same (a still body is handed over again and again)."""
+    return a is b or np.array_equal(a, b)
+
+
+class KeptCandidates:
+    """The body collider's cached candidates: per vertex the triangles found within the margin (the
+    first ``count[i]`` of row ``i`` of ``slots``: a vertex asked again rewrites its own row only), where
+    the vertex was when its budget was last counted (``ref``) and how much of its budget
+    (:attr:`BodyCollider.budget`) it has left there (``slack`` [m]), and the body frame they were counted on."""
+
+    def __init__(self, frame, x):
+        n = len(x)
+        self.frame, self.ref, self.slack = frame, x.copy(), np.zeros(n)
+        self.slots = np.zeros((n, 0), np.int32)
+        self.count = np.zeros(n, np.int64)
+        self._lo = np.zeros(n, np.int64)
+
+    def spans(self):
+        """(lo, hi, tri): vertex i's candidate triangles are ``tri[lo[i]:hi[i]]``."""
+        return self._lo, self._lo + self.count, self.slots.reshape(-1)
+
+    def spend(self, drift, x, frame) -> None:
+        """The body frame changed to ``frame`` with the vertices at ``x``: ``drift`` (per vertex) is spent."""
+        self.slack = self.slack - drift
+        self.ref = x.copy()
+        self.frame = frame
+
+    def renew(self, ids, x, keys, face_count: int, slack) -> None:
+        """Vertices ``ids`` (sorted) were asked about again at ``x``: their whole budget ``slack`` back,
+        and as their candidates the triangles of ``keys`` (sorted ``vertex · F + triangle``)."""
+        self.ref[ids] = x[ids]
+        self.slack[ids] = slack
+        vertex, tri = keys // face_count, keys % face_count
+        start = np.searchsorted(vertex, ids)
+        count = np.searchsorted(vertex, ids, side="right") - start
+        width = int(count.max(initial=0))
+        if width > self.slots.shape[1]:  # rows widened (a quarter more, so that this is rare)
+            grown = np.zeros((len(self.count), max(width, (5 * self.slots.shape[1]) // 4)), np.int32)
+            grown[:, :self.slots.shape[1]] = self.slots
+            self.slots = grown
+            self._lo = np.arange(len(self.count), dtype=np.int64) * grown.shape[1]
+        self.count[ids] = count
+        self.slots[vertex, np.arange(len(keys)) - np.repeat(start, count)] = tri
+
+
+class LandingTests:
+    """The landing tests against the body standing at ``body_x`` (a step's end, the same for each of
+    the step's contact passes): per vertex where it was last tested and a lower bound of its distance
+    from the body there (−inf: never tested). A vertex at least ``bound`` away cannot have come within
+    the thickness unless it has moved more than ``bound`` less the thickness since."""
+
+    def __init__(self, body_x, n: int):
+        self.body_x = body_x
+        self.x = np.zeros((n, 3))
+        self.bound = np.full(n, -np.inf)
+
+    def unclear(self, rows, x, thickness) -> np.ndarray:
+        """Those of ``rows`` that may be within ``thickness`` at ``x``."""
+        moved = np.linalg.norm(x[rows] - self.x[rows], axis=1)
+        return rows[self.bound[rows] - moved <= per_vertex(thickness, rows)]
+
+    def found(self, rows, x, dist, tri, half) -> None:
+        """``rows`` tested at ``x``: ``dist``, ``tri`` as :meth:`BodyCollider._closest` gives them (a
+        distance is exact within ``half`` the margin, where every triangle is a candidate; none found
+        or a farther one means at least that)."""
+        self.x[rows] = x[rows]
+        self.bound[rows] = np.minimum(np.where(tri[rows] >= 0, dist[rows], np.inf), half)
+
+
+class LastResponse:
+    """The cloth at the last response: positions ``x``, lower bounds of their distances from the body
+    (``bound`` [m], at most ``reach``; negative inside), of how far outside it they surely were
+    (``outside`` [m], 0 where the side is not certain), and the body's positions then; the body's
+    drift since within ``reach``, for the last body asked about."""
+
+    def __init__(self, x, bound, body, outside, reach: float):
+        self.x, self.bound, self.body, self.outside, self.reach = x, bound, body, outside, reach
+        self._drift = None  # (body positions, BodyDrift to them)
+
+    def drift(self, body_x, faces) -> BodyDrift:
+        """The body's :class:`BodyDrift` from then to ``body_x`` (the same positions asked again: the same one)."""
+        d = self._drift
+        if d is None or not same_positions(d[0], body_x):
+            d = self._drift = (body_x.copy(), BodyDrift(self.body, body_x, faces, self.reach))
+        return d[1]
+
+
+def per_vertex(thickness, ids):
+    """``thickness`` [m] of the vertices ``ids``: one for all, or each vertex's own ((N,) array: an
+    outfit's garments, each kept its layers out)."""
+    return thickness if np.ndim(thickness) == 0 else np.asarray(thickness)[ids]
