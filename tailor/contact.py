@@ -29,8 +29,10 @@ __all__ = ["ContactPipeline", "ContactLoads", "ContactSettings", "StaticBody", "
            "body_margin", "check_self_collision"]
 
 BODY_MARGIN = 0.03
-"""Body contact query radius [m]: candidates are reused while no cloth vertex moves half of it, and a
-vertex found deeper than half of it is judged against the closed surface (walking limbs move ~1 cm a step)."""
+"""Body contact query radius [m]: candidates are reused while no cloth vertex moves its budget (half
+of it, :data:`~tailor.collide.body.SPEND`), a vertex found deeper than the rest (the sure radius) is
+judged against the closed surface, and a walking step carries no body point near the cloth further
+than that (walking limbs move ~1 cm a step)."""
 
 
 def body_margin(thickness: float) -> float:
