@@ -27,6 +27,7 @@ SPEND = 0.5
 again (:meth:`BodyCollider.candidates`); the rest, :attr:`BodyCollider.sure`, is where every body
 triangle is among its candidates, so a distance found there is exact."""
 
+
 class BodyCollider:
     """Cloth–body contact (Carignan Eq. 9–14) with FCL as the broad phase.
 
@@ -66,7 +67,7 @@ class BodyCollider:
         self.sure = self.margin - self.budget
         self._boxes = {}  # span of body frames (frame // BODY_SPAN) → its broad phase
         self._geometry = {}  # body frame → its triangles (TriangleGeometry)
-        self._cache: KeptCandidates | None = None  # each vertex's candidates and what is left of its margin
+        self._cache: KeptCandidates | None = None  # each vertex's candidates and what is left of its budget
         self._drifts = {}  # (frame, frame) → the body's BodyDrift between them
         self._previous = None  # signed distance of every vertex after the last response
         self._seen: LastResponse | None = None  # where the cloth and the body were at the last response
@@ -305,12 +306,12 @@ class BodyCollider:
         dist, tri, bary, normal = self.nearest(x, body_x, frame)
         # the cached candidates hold every triangle within ``sure``: a distance found is exact up to
         # there, and none found (or a farther one) means at least that
-        half = self.sure
-        self._seen = LastResponse(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), half), body_x,
-                           np.where((tri >= 0) & (dist > 0.0) & (dist < half), dist, 0.0), half)
+        sure = self.sure
+        self._seen = LastResponse(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), sure), body_x,
+                                  np.where((tri >= 0) & (dist > 0.0) & (dist < sure), dist, 0.0), sure)
         prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
         crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
-        plausible = (dist > -half) | crossed
+        plausible = (dist > -sure) | crossed
         hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & plausible)
         self._previous = np.where(tri >= 0, dist, np.inf)
         self._previous[hit] = per_vertex(thickness, hit)  # pushed back out by the response

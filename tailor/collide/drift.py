@@ -1,6 +1,6 @@
 """How far the body moved near each point, relative to the point: :class:`BodyDrift`.
 
-The body collider's bounds (candidates kept while nothing moved more than half the margin, a
+The body collider's bounds (candidates kept while nothing moved more than its budget, a
 vertex out of reach while its last distance exceeds what it and the body moved since) need the
 body's motion between two of its states. A walking body's feet move 8 cm a frame while its trunk
 moves 1 cm, and the cloth on the trunk moves with it: the largest motion anywhere on the body says

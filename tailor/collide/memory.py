@@ -72,12 +72,12 @@ class LandingTests:
         moved = np.linalg.norm(x[rows] - self.x[rows], axis=1)
         return rows[self.bound[rows] - moved <= per_vertex(thickness, rows)]
 
-    def found(self, rows, x, dist, tri, half) -> None:
+    def found(self, rows, x, dist, tri, sure) -> None:
         """``rows`` tested at ``x``: ``dist``, ``tri`` as :meth:`BodyCollider._closest` gives them (a
-        distance is exact within ``half`` the margin, where every triangle is a candidate; none found
-        or a farther one means at least that)."""
+        distance is exact within ``sure`` [m], where every triangle is a candidate; none found or a
+        farther one means at least that)."""
         self.x[rows] = x[rows]
-        self.bound[rows] = np.minimum(np.where(tri[rows] >= 0, dist[rows], np.inf), half)
+        self.bound[rows] = np.minimum(np.where(tri[rows] >= 0, dist[rows], np.inf), sure)
 
 
 class LastResponse:
