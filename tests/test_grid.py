@@ -143,7 +143,7 @@ def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_
     ring = (np.zeros(2 * n + 1, np.int64), np.zeros(0, np.int64))
     args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02, *ring,
             NO_PATCH_PAIRS)
-    (want, want_near), (got, got_near) = _ee_pairs(*args), _ee_pairs_guessed(*args)
+    (want, want_near), (got, got_near) = _ee_pairs(*args), _ee_pairs_guessed(*args, _GUESS_PAIRS)
     first = np.isin(want[:, 0] // 2, np.arange(_GUESS_CHUNK)).sum()
     assert first > _GUESS_CHUNK * _GUESS_PAIRS and len(want) - first > 100  # one chunk overflowed, the others did not
     assert np.array_equal(got, want) and np.array_equal(got_near, want_near)
@@ -174,6 +174,30 @@ def test_vertex_triangle_pairs_overflowing_their_room_are_searched_again_in_vert
     assert np.all(np.diff(rank[v]) >= 0)  # grouped by vertex, in the given order
     got = set(zip(v.tolist(), t.tolist()))
     assert len(got) == len(v) and got == {(verts[i], k) for i, k in zip(*np.nonzero(want))}
+
+
+def test_a_learning_room_finds_every_pair_and_sizes_the_next_search_by_this_ones_density():
+    """A search repeated step after step makes room per query from what the last one found
+    (:class:`PairRoom`): a room far too small finds the same pairs in the same order (its chunks
+    searched again), and the next room is twice the pairs per query found plus the slack, within
+    its bounds."""
+    from tailor.collide.grid import ROOM_LEAST, ROOM_SLACK, PairRoom
+
+    rng = np.random.default_rng(11)
+    x, f, lo, hi = _soup(rng, n=600, faces=900, spread=0.12)
+    edges = np.unique(np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    ring = _ring(len(x), f)[:2]
+    want, want_near = edge_edge_pairs(np.arange(len(edges)), edges, lo, hi, 0.01, 0.02, ring)
+    room = PairRoom()
+    room.per = 1  # every chunk overflows
+    got, got_near = edge_edge_pairs(np.arange(len(edges)), edges, lo, hi, 0.01, 0.02, ring, room=room)
+    assert np.array_equal(got, want) and np.array_equal(got_near, want_near)
+    assert len(want) > 16 * len(edges)  # dense enough to set the room above its floor
+    assert room.per == min(room.most, max(ROOM_LEAST, 2 * len(want) // len(edges) + ROOM_SLACK)) > ROOM_LEAST
+    v0, t0, _ = vertex_triangle_pairs(np.arange(len(x)), np.arange(len(f)), f, lo, hi, x, 0.01, 0.02, ring, exact=False)
+    small = PairRoom(most=20)
+    v1, t1, _ = vertex_triangle_pairs(np.arange(len(x)), np.arange(len(f)), f, lo, hi, x, 0.01, 0.02, ring, exact=False, room=small)
+    assert np.array_equal(v0, v1) and np.array_equal(t0, t1) and small.per <= 20
 
 
 def test_searches_filtered_by_patch_pairs_find_what_the_patches_filter_keeps_of_the_unfiltered_ones():

@@ -22,6 +22,11 @@ BODY_SPAN = 16
 """Body frames one FCL broad phase of the body serves (:meth:`BodyCollider._body`): a walk builds its
 boxes, and learns which of them lie near each cube of space, once per span instead of every frame."""
 
+QUERY_CHUNK = 2048
+"""Cloth vertices one body query asks about at a time (:meth:`BodyCollider._query`): the pairs a
+query finds on the way to its answer take several times the memory of the answer, so a whole
+cloth is asked about in parts."""
+
 SPEND = 0.5
 """Share of the margin a cloth vertex may move (relative to the body near it) before it is asked
 again (:meth:`BodyCollider.candidates`); the rest, :attr:`BodyCollider.sure`, is where every body
@@ -171,13 +176,22 @@ class BodyCollider:
         return dist, tri_out, bary, normal
 
     def _query(self, points, frame, ids, radius=None):
-        """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of ``points``."""
+        """Sorted keys ``vertex · F + triangle`` of body triangles within the margin (or ``radius``) of
+        ``points`` (``ids`` their vertices), :data:`QUERY_CHUNK` points at a time."""
+        self.queries += 1
+        self.queried_points += len(points)
+        ids = np.asarray(ids, np.int64)
+        keys = np.concatenate([self._query_part(points[k:k + QUERY_CHUNK], frame, ids[k:k + QUERY_CHUNK], radius)
+                               for k in range(0, len(points), QUERY_CHUNK)] or [np.zeros(0, np.int64)])
+        if len(points) > QUERY_CHUNK and np.any(np.diff(ids) < 0):  # parts in order of their vertices are sorted already
+            keys.sort()
+        return keys
+
+    def _query_part(self, points, frame, ids, radius):
         near, geometry = self._body(frame)
         point, tri = (near.query(points, geometry) if radius is None
                       else clustered_query(points, radius, near.target, geometry=geometry))
-        self.queries += 1
-        self.queried_points += len(points)
-        keys = np.asarray(ids, np.int64)[point] * len(self.faces) + tri
+        keys = ids[point] * len(self.faces) + tri
         keys.sort()  # grouped by vertex is all the CSR needs (a repeated pair would only be tested twice)
         return keys
 

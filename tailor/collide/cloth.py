@@ -55,7 +55,7 @@ import numpy as np
 from ..errors import SimulationUnstable
 from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
                             present, touching, touching_vt, unique_ints)
-from .grid import edge_edge_pairs, vertex_rings, vertex_triangle_pairs
+from .grid import PairRoom, edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
 from .margins import self_margin
@@ -154,12 +154,12 @@ class SelfCollider:
         self.regions = Regions(self.faces, np.asarray(face_group), np.asarray(x, float), patch)
         self._edge_patches = self.regions.edge_patches(self._edges)  # each edge's patches, for the searches' filter
         self._ee = np.zeros((0, 4), np.int64)
+        self._rooms = (PairRoom(), PairRoom())  # the searches' room per query, vertex–triangle and edge–edge
         self._anchor = None  # (N, 3) each vertex's position relative to the centroid when last queried
         self._active = None  # (F,) bool: the faces the candidates were found among
         self._pairs = None  # sorted keys of the patch pairs the candidates were found among (None: all)
         self._reach = self.margin  # how deep a pair may have crossed in a step (the narrow phase cut-off beyond thickness)
-        self._vtx = np.zeros(0, np.int64)
-        self._tri = np.zeros(0, np.int64)
+        self._vtx, self._tri = np.zeros(0, np.int64), np.zeros(0, np.int64)
         self._tri_side = np.zeros(0, np.int8)
         self._ee_toward = np.zeros((0, 3))
         self._x_prev = None
@@ -266,7 +266,7 @@ class SelfCollider:
         # (ignoring those, a strip crumpling over one or two triangles passed through itself)
         patch_pairs = self._patch_pairs()
         find = partial(vertex_triangle_pairs, faces=self.faces, x=x, radius=radius, cell=self._grid_cell,
-                       ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs)
+                       ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs, room=self._rooms[0])
         edge_ids = present(self._face_edges[faces].ravel(), len(self._edges))
         if dirty is None:
             (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs)
@@ -304,7 +304,7 @@ class SelfCollider:
         if not self.edges:
             return np.zeros((0, 4), np.int64), np.zeros(0, bool)
         return edge_edge_pairs(ids, self._edges, lo, hi, self.thickness + self.margin, self._grid_cell, self._ring_csr,
-                               dirty=dirty, patch_pairs=patch_pairs)
+                               dirty=dirty, patch_pairs=patch_pairs, room=self._rooms[1])
 
     def _tri_sides(self, vertex, tri):
         """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""

@@ -20,7 +20,7 @@ from numba import njit, prange
 from .closest import closest_barycentric
 from .patch_pairs import NO_PATCH_PAIRS, edge_edge_passes, vertex_triangle_passes
 
-__all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "gap2", "owns", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS"]
+__all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "gap2", "owns", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS", "PairRoom"]
 
 MAX_CELLS = 1 << 21
 """Cells a grid holds, about (one more per axis at most: 16 MB of cell pointers); coarser cells beyond."""
@@ -167,14 +167,38 @@ garment, 13-14 where an outfit's layers overlap (a chunk over its room is search
 _GUESS_TRIANGLES = 32
 """Triangles per vertex a chunk of :func:`_vt_pairs` has room for."""
 
+ROOM_LEAST, ROOM_SLACK = 16, 4
+"""A query's room holds at least ROOM_LEAST pairs, and ROOM_SLACK beyond twice the pairs per query of
+the search before (:class:`PairRoom`): on a walking T-shirt and an outfit, 0–4 % of the chunks then
+overflow (a chunk's densest queries find up to 33 edge pairs, the mean 3–13)."""
+
+
+class PairRoom:
+    """How many pairs a query's chunk makes room for in a search repeated step after step
+    (:func:`vertex_triangle_pairs`, :func:`edge_edge_pairs`): twice the pairs per query the last
+    search found plus :data:`ROOM_SLACK`, at least :data:`ROOM_LEAST` (the first search's), at most
+    ``most``. A chunk denser than its room is searched again, so a small guess costs time, never a
+    pair; a large one costs memory (room for 32 edge pairs a query took 1 KB an edge, the largest
+    transient of a drape)."""
+
+    def __init__(self, most: int = 32):
+        self.most = int(most)
+        self.per = min(ROOM_LEAST, self.most)
+
+    def learn(self, pairs: int, queries: int) -> None:
+        """The last search found ``pairs`` for ``queries`` queries."""
+        if queries:
+            self.per = min(self.most, max(ROOM_LEAST, 2 * pairs // queries + ROOM_SLACK))
+
 
 @njit(cache=True)
 def _chunk_room(n, per, width):
     """The chunks of ``n`` queries (:data:`_GUESS_CHUNK` each), a chunk's room (``per`` pairs a query),
-    rows for every chunk's room (``width`` ints each, and a bool), and each chunk's count of pairs."""
+    rows for every chunk's room (``width`` 32-bit ints each, and a bool; the pairs joined are
+    64-bit), and each chunk's count of pairs."""
     chunks = (n + _GUESS_CHUNK - 1) // _GUESS_CHUNK
     room = _GUESS_CHUNK * per
-    return chunks, room, np.empty((chunks * room, width), np.int64), np.empty(chunks * room, np.bool_), np.zeros(chunks, np.int64)
+    return chunks, room, np.empty((chunks * room, width), np.int32), np.empty(chunks * room, np.bool_), np.zeros(chunks, np.int64)
 
 
 @njit(cache=True)
@@ -237,11 +261,11 @@ def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo
 
 
 @njit(cache=True, parallel=True)
-def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx, patch_pairs):
-    """The triangles of every active vertex in one pass where they fit (as :func:`_ee_pairs_guessed`)."""
+def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx, patch_pairs, per):
+    """The triangles of every active vertex in one pass where they fit, ``per`` a vertex (as :func:`_ee_pairs_guessed`)."""
     ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
     n = len(verts)
-    chunks, room, out, out_near, used = _chunk_room(n, _GUESS_TRIANGLES, 2)
+    chunks, room, out, out_near, used = _chunk_room(n, per, 2)
     for ch in prange(chunks):
         written = 0
         for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
@@ -274,7 +298,7 @@ def _boxes_of(lo, hi, elements, rows):
 
 
 def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool,
-                          patch_pairs=NO_PATCH_PAIRS):
+                          patch_pairs=NO_PATCH_PAIRS, room: PairRoom | None = None):
     """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
     ``verts`` against each of the triangles ``tris`` (rows of ``faces``) not at it whose boxes come
     within ``radius``; ``near``: whether a corner of the triangle is a neighbour of the vertex
@@ -283,6 +307,7 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step; both ``x`` for points).
     With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``. Only the
     pairs ``patch_pairs`` lets through (:meth:`~tailor.collide.patch_pairs.PatchPairs.arrays`; default: all).
+    ``room`` sizes the search's chunks and learns from it (default: :data:`_GUESS_TRIANGLES` a vertex).
     """
     verts = np.ascontiguousarray(verts, np.int64)
     tris = np.ascontiguousarray(tris, np.int64)
@@ -295,7 +320,10 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     grid = Grid(np.vstack([t_lo.min(axis=0), v_lo.min(axis=0) - radius]), np.vstack([t_hi.max(axis=0), v_hi.max(axis=0) + radius]),
                 cell)
     pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
-                            grid.cell, grid.dims, float(radius), bool(exact), *ring, patch_pairs)
+                            grid.cell, grid.dims, float(radius), bool(exact), *ring, patch_pairs,
+                            _GUESS_TRIANGLES if room is None else room.per)
+    if room is not None:
+        room.learn(len(pairs), len(verts))
     return np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1]), near
 
 
@@ -340,13 +368,13 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx, patch_pairs):
+def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx, patch_pairs, per):
     """:func:`_ee_pairs` in one pass where it can: each chunk of :data:`_GUESS_CHUNK` queries writes
-    into room for :data:`_GUESS_PAIRS` pairs a query; the chunks' pairs are joined in order and only a
-    chunk that overflowed is searched again, straight into its place (the same pairs, in the same order)."""
+    into room for ``per`` pairs a query; the chunks' pairs are joined in order and only a chunk that
+    overflowed is searched again, straight into its place (the same pairs, in the same order)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
     nq = len(queries)
-    chunks, room, out, out_near, used = _chunk_room(nq, _GUESS_PAIRS, 4)
+    chunks, room, out, out_near, used = _chunk_room(nq, per, 4)
     for ch in prange(chunks):
         first, end = ch * room, (ch + 1) * room
         written = 0
@@ -385,13 +413,14 @@ def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, rin
     return out, out_near
 
 
-def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None, patch_pairs=NO_PATCH_PAIRS):
+def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None, patch_pairs=NO_PATCH_PAIRS,
+                    room: PairRoom | None = None):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
     share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
     pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
     :func:`vertex_triangle_pairs`). With ``dirty`` ((len(ids),) bool), only the pairs with at least
     one dirty edge (the others are known from an earlier query). Only the pairs ``patch_pairs`` lets
-    through (as in :func:`vertex_triangle_pairs`; its edges are the rows of ``edges``)."""
+    through (as in :func:`vertex_triangle_pairs`; its edges are the rows of ``edges``); ``room`` as there."""
     ids = np.ascontiguousarray(ids, np.int64)
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
@@ -399,5 +428,9 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dir
     edges = np.ascontiguousarray(edges, np.int64)
     e_lo, e_hi = _boxes_of(np.ascontiguousarray(lo, np.float64), np.ascontiguousarray(hi, np.float64), edges, ids)
     grid = Grid(e_lo.min(axis=0)[None] - radius, e_hi.max(axis=0)[None] + radius, cell)
-    return _ee_pairs_guessed(ids, edges, e_lo, e_hi, np.flatnonzero(dirty).astype(np.int64), dirty,
-                             grid.origin, grid.cell, grid.dims, float(radius), *ring, patch_pairs)
+    queries = np.flatnonzero(dirty).astype(np.int64)
+    pairs, near = _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, grid.origin, grid.cell, grid.dims, float(radius), *ring,
+                                    patch_pairs, _GUESS_PAIRS if room is None else room.per)
+    if room is not None:
+        room.learn(len(pairs), len(queries))
+    return pairs, near

@@ -367,6 +367,15 @@ class ImplicitEuler(IntegratorBase):
         return self._step(model, state, dt, forces, contacts, predict, 0)
 
     def _step(self, model, state, dt, forces, contacts, predict, depth) -> StepResult:
+        result = self._attempt(model, state, dt, forces, contacts, predict, depth)
+        if result is None:  # taken as two halves, the whole step's system freed first (one at a time alive)
+            return self._halves(model, state, dt, forces, contacts, predict, depth)
+        return result
+
+    def _attempt(self, model, state, dt, forces, contacts, predict, depth) -> StepResult | None:
+        """The step solved whole; None where it is to be taken as two half steps instead (its CG did
+        not converge within the iterations, a landing was still unsettled, or its end overstretches),
+        up to ``max_halvings`` deep."""
         n = model.vertex_count
         f = forces(model, state).reshape(-1)
         system = self._system(model, state, dt, f)
@@ -387,16 +396,16 @@ class ImplicitEuler(IntegratorBase):
         self.counters.solves += 1
         if not converged and iterations >= self.max_iterations and depth < self.max_halvings and np.all(np.isfinite(dv)):
             self.counters.halvings += 1
-            return self._halves(model, state, dt, forces, contacts, predict, depth)
+            return None
         if not settled and depth < self.max_halvings:
             self.counters.landing_halvings += 1
-            return self._halves(model, state, dt, forces, contacts, predict, depth)
+            return None
         self._check(state, dt, dv, converged, iterations)
         dv[~system.free] = 0.0
         x_end = state.x + dt * (state.v + dv.reshape(n, 3))
         if depth < self.max_halvings and self._overstretches(model, state, x_end):
             self.counters.stretch_halvings += 1
-            return self._halves(model, state, dt, forces, contacts, predict, depth)
+            return None
         self._warm = dv
         impulses = None
         if len(held):
