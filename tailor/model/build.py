@@ -202,7 +202,10 @@ def build_model(
     rho, rigidity, (k1, k2, k12), k_fast = _face_stiffness(params, curves, fp)
     mass = np.bincount(faces.reshape(-1), weights=np.repeat(rho * area / 3.0, 3), minlength=len(uv))
     hv, hf, e_len2, hinge_b, hinge_k, curvature_scale = _hinge_stiffness(uv, faces, area, rigidity, fp)
-    springs, ks, rest, kd, omega_springs = _springs(uv, faces, fp, hv, hf, area, k1, k2, rigidity, mass, damping)
+    if elastic == "springs":
+        springs, ks, rest, kd, omega_springs = _springs(uv, faces, fp, hv, hf, area, k1, k2, rigidity, mass, damping)
+    else:  # the membrane needs no net (it took a fifth of a garment model's memory)
+        springs, (ks, rest, kd), omega_springs = np.zeros((0, 2), np.intp), (np.zeros(0),) * 3, 0.0
     dm_inv = _grain_frame_dm_inv(uv, faces, np.asarray(mesh.face_grain, float))
     omega_face = element_frequencies(dm_inv, area, rho, *k_fast)
     dt = _stable_step(uv, faces, area, params, safety, damping, omega_springs if elastic == "springs" else

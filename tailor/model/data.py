@@ -59,8 +59,9 @@ class Model:
         cylinders (Eq. 25).
     spring_vertices : (S, 2) int; spring_rest_length (S,) [m]; spring_stiffness (S,) [N/m];
     spring_damping : (S,) [N·s/m]
-        Walker's structural, shear and flexion springs (used when ``elastic == "springs"``),
-        stiffness calibrated to the membrane's energy, dampers critical for the net's fastest mode.
+        Walker's structural, shear and flexion springs (built and used when ``elastic == "springs"``;
+        none otherwise), stiffness calibrated to the membrane's energy, dampers critical for the
+        net's fastest mode.
     gravity : (3,) [m/s²]
     pair_vertices : (P, 2) int; pair_stiffness (P,) [N/m]; pair_damping (P,) [N·s/m]
         Zero-length springs between vertex pairs (seams being closed), integrated implicitly.
