@@ -56,8 +56,8 @@ def air_forces(model, state, wind=None, out=None) -> np.ndarray:
     out = np.zeros_like(state.x) if out is None else out
     if model.air_density > 0.0 and model.face_count:
         air = np.zeros_like(out)
-        _air(state.x, state.v, model.faces, _face_wind(model, state, wind), model.air_density * model.drag_coefficient, air,
-             np.zeros((0, 3, 3)))
+        _air(state.x, state.v, model.faces, _face_wind(model, state, wind), -0.5 * model.air_density * model.drag_coefficient,
+             air, np.zeros((0, 3, 3)))
         out += air
     return out
 
@@ -73,10 +73,11 @@ def _face_wind(model, state, wind) -> np.ndarray:
 
 
 @njit(cache=True)
-def _air(x, v, faces, wind, rho_cd, force, damping):
-    """Each face's air force (into ``force``, (N, 3), unless empty) and its velocity derivative
-    (into ``damping``, (N, 3, 3), unless empty), a third to each corner, face by face: no
-    per-face temporaries (the arrays of a vectorised version took a tenth of a drape's memory)."""
+def _air(x, v, faces, wind, coefficient, force, damping):
+    """Each face's air force (into ``force``, (N, 3), unless empty; ``coefficient`` −½ρC_d) or its
+    velocity derivative (into ``damping``, (N, 3, 3), unless empty; ``coefficient`` ρC_d), a third
+    to each corner, face by face: no per-face temporaries (the arrays of a vectorised version took a
+    tenth of a drape's memory). The products are taken in the order the vectorised version took them."""
     one = wind.shape[0] == 1
     for t in range(faces.shape[0]):
         a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
@@ -90,16 +91,16 @@ def _air(x, v, faces, wind, rho_cd, force, damping):
             continue
         n0, n1, n2 = n0 / area2, n1 / area2, n2 / area2
         w = wind[0] if one else wind[t]
-        vn = (((v[a, 0] + v[b, 0] + v[c, 0]) / 3.0 - w[0]) * n0 + ((v[a, 1] + v[b, 1] + v[c, 1]) / 3.0 - w[1]) * n1
-              + ((v[a, 2] + v[b, 2] + v[c, 2]) / 3.0 - w[2]) * n2)
+        vn = (((v[a, 0] + v[b, 0] + v[c, 0]) / 3.0 - w[0]) * n0 + ((v[a, 2] + v[b, 2] + v[c, 2]) / 3.0 - w[2]) * n2
+              + ((v[a, 1] + v[b, 1] + v[c, 1]) / 3.0 - w[1]) * n1)  # in the order NumPy's einsum sums them
         n = (n0, n1, n2)
         if force.shape[0]:
-            mag = -0.5 * rho_cd * (0.5 * area2) * vn * abs(vn) / 3.0
+            mag = coefficient * (0.5 * area2) * vn * abs(vn) / 3.0
             for k in range(3):
                 for i in range(3):
                     force[faces[t, k], i] += n[i] * mag
         if damping.shape[0]:
-            drag = rho_cd * (0.5 * area2) * abs(vn) / 3.0
+            drag = coefficient * (0.5 * area2) * abs(vn) / 3.0
             for k in range(3):
                 for i in range(3):
                     for j in range(3):

@@ -202,10 +202,7 @@ def build_model(
     rho, rigidity, (k1, k2, k12), k_fast = _face_stiffness(params, curves, fp)
     mass = np.bincount(faces.reshape(-1), weights=np.repeat(rho * area / 3.0, 3), minlength=len(uv))
     hv, hf, e_len2, hinge_b, hinge_k, curvature_scale = _hinge_stiffness(uv, faces, area, rigidity, fp)
-    if elastic == "springs":
-        springs, ks, rest, kd, omega_springs = _springs(uv, faces, fp, hv, hf, area, k1, k2, rigidity, mass, damping)
-    else:  # the membrane needs no net (it took a fifth of a garment model's memory)
-        springs, (ks, rest, kd), omega_springs = np.zeros((0, 2), np.intp), (np.zeros(0),) * 3, 0.0
+    springs, ks, rest, kd, omega_springs = _springs(uv, faces, fp, hv, hf, area, k1, k2, rigidity, mass, damping, elastic)
     dm_inv = _grain_frame_dm_inv(uv, faces, np.asarray(mesh.face_grain, float))
     omega_face = element_frequencies(dm_inv, area, rho, *k_fast)
     dt = _stable_step(uv, faces, area, params, safety, damping, omega_springs if elastic == "springs" else
@@ -288,9 +285,12 @@ def _hinge_stiffness(uv, faces, area, rigidity, fp):
     return hv, hf, e_len2, hinge_b, hinge_k, curvature_scale
 
 
-def _springs(uv, faces, fp, hv, hf, area, k1, k2, rigidity, mass, damping):
+def _springs(uv, faces, fp, hv, hf, area, k1, k2, rigidity, mass, damping, elastic):
     """Walker's net (springs, stiffness, rest length), its dampers critical for its fastest frequency
-    (Eq. 26) and that frequency."""
+    (Eq. 26) and that frequency; none for the membrane (``elastic``), which never reads it (it took
+    a fifth of a garment model's memory)."""
+    if elastic != "springs":
+        return np.zeros((0, 2), np.intp), np.zeros(0), np.zeros(0), np.zeros(0), 0.0
     n = len(uv)
     springs, ks, rest = _walker_springs(uv, faces, hv, hf, np.maximum(k1, k2), rigidity)
     ks = _calibrated_springs(uv, faces, fp, springs, ks, rest, area, k1)
