@@ -313,9 +313,9 @@ class SelfCollider:
         return self.layers.vertex_triangle_sides(self._garment, self.faces, vertex, tri)
 
     def _edge_directions(self, x, ee):
-        """Each edge–edge candidate's outward direction at ``x`` (:class:`Layers`; none for a single garment)."""
+        """Each edge–edge candidate's outward direction at ``x`` (:class:`Layers`; a single garment: one zero row for all)."""
         if self.layers is None:
-            return np.zeros((len(ee), 3))
+            return np.broadcast_to(np.zeros(3), (len(ee), 3))
         return self.layers.edge_directions(self._garment, self.faces, x, ee)
 
     def ignore(self, vertices, keep=None) -> None:
