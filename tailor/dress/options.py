@@ -18,7 +18,7 @@ from ..integrators import INTEGRATORS
 from ..sim import DEFAULT_QUALITY, QUALITY
 from ..tearing import Cut
 
-__all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION",
+__all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION", "FREE_SEW_STEP",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
            "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "FREEZE_STRETCH", "FREEZE_RINGS", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
            "TUCK_BELOW", "TUCK_GATHER_TIME", "TUCK_ROW"]
@@ -177,6 +177,13 @@ SEWING = PhaseSettings(
     max_stretch_change=math.inf, wind=False,
     # a corner pulled three ways may stretch its triangles this far before merging
     max_stretch=10.0, moving=False)
+FREE_SEW_STEP = 0.02
+"""[s] The step a sewing stage takes when it holds no heights of the garment it sews (a T-shirt, a
+dress, an outfit's outer garment over a held band): its seams close in about as much simulated
+time as at the plain 10 ms step, in half the steps (the pull's damping taken for the step,
+:attr:`~tailor.seams.Sewing.step`). A stage holding a band's heights keeps the plain step: the
+heights are put back after each step, and within a longer one the seams drag the band's lower
+rows further (docs/measurements.md, twenty-fourth day)."""
 SETTLE_QUALITY = QUALITY["draft"]
 """The preset whose step and tolerance every preset settles at (``PhaseSettings.quasi_static``)."""
 SETTLING = PhaseSettings("settling", gravity=True, contact=ContactSettings(), tolerance=SETTLE_QUALITY.tolerance,

@@ -26,7 +26,7 @@ from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..outfit import garment_of_vertex, tuck_targets
 from ..sim import Guard, Stepper, max_stretch
-from .options import (BLOCKED_OVER, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
+from .options import (BLOCKED_OVER, FREE_SEW_STEP, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
                       ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
                       TUCK_ROW, WELD_BATCH, DrapeOptions, PhaseSettings)
 from .report import DrapeProgress, PhaseReport
@@ -103,7 +103,7 @@ class Dressing:
         if self.phase.moving:
             dt = self.timeline.moving_step(state, duration)
         else:
-            dt = None  # sewing: the plain implicit step
+            dt = self.garment.sewing.step  # sewing: the plain implicit step, or a stage's longer one
             if self.phase.gravity:
                 dt = self.timeline.settle_step if self.phase.quasi_static else self.timeline.still_step
         state = self.stepper.advance(self.garment.model, state, duration, dt)
@@ -191,6 +191,7 @@ def sew(d: Dressing, x0):
             sewing.merge_distance = merge_distance
             d.contacts.follow(g.friction, state.x)
             d.constrain()
+        sewing.step = _sew_step(d, stage.garment)
         t, unwelded = 0.0, 0  # pairs merged since the last weld (held by their seam springs meanwhile)
         sewing.route_around(None)
         if d.placer is not None and sewing.block(g.frame(state), d.placer.inside, over=BLOCKED_OVER):  # over it from the start
@@ -215,8 +216,18 @@ def sew(d: Dressing, x0):
         if sewing.sewing_count:
             raise SimulationError(_open_seams(g, state, d.options.sew_timeout))
     sewing.route_around(None)
+    sewing.step = None
     return state, PhaseReport(total, time.perf_counter() - t0, frames,
                               {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds})
+
+
+def _sew_step(d: Dressing, garment: int) -> float | None:
+    """The step [s] a stage sewing ``garment`` takes: :data:`~.options.FREE_SEW_STEP` when it holds
+    none of that garment's heights (an implicit drape only), else the plain one (None)."""
+    if d.timeline.still_step is None:
+        return None
+    held = d.held_heights[0] if d.held_heights is not None else np.zeros(0, np.intp)
+    return None if np.isin(held, d.garment.garment_vertices(garment)).any() else FREE_SEW_STEP
 
 
 def _dress_over(d: Dressing, state, garment: int):
