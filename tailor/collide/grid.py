@@ -161,11 +161,12 @@ _GUESS_CHUNK = 256
 """Queries (vertices, edges) a chunk of the one-pass searches takes in turn (:func:`_vt_pairs`, :func:`_ee_pairs_guessed`)."""
 
 _GUESS_PAIRS = 32
-"""Pairs per query a chunk of :func:`_ee_pairs_guessed` has room for: a cloth edge meets about 8 in one
-garment, 13-14 where an outfit's layers overlap (a chunk over its room is searched twice)."""
+"""Pairs per query a chunk of :func:`_ee_pairs_guessed` has room for without a :class:`PairRoom`, and
+the most a :class:`PairRoom` gives: a cloth edge meets about 8 in one garment, 13-14 where an
+outfit's layers overlap (a chunk over its room is searched twice)."""
 
-_GUESS_TRIANGLES = 32
-"""Triangles per vertex a chunk of :func:`_vt_pairs` has room for."""
+_GUESS_TRIANGLES = _GUESS_PAIRS
+"""Triangles per vertex a chunk of :func:`_vt_pairs` has room for without a :class:`PairRoom`."""
 
 ROOM_LEAST, ROOM_SLACK = 16, 4
 """A query's room holds at least ROOM_LEAST pairs, and ROOM_SLACK beyond twice the pairs per query of
@@ -181,7 +182,7 @@ class PairRoom:
     pair; a large one costs memory (room for 32 edge pairs a query took 1 KB an edge, the largest
     transient of a drape)."""
 
-    def __init__(self, most: int = 32):
+    def __init__(self, most: int = _GUESS_PAIRS):
         self.most = int(most)
         self.per = min(ROOM_LEAST, self.most)
 
