@@ -297,14 +297,37 @@ def _within(p, t, p_lo, p_hi, tri_lo, tri_hi, corners, r2, exact):
     return d2 <= r2
 
 
+@njit(cache=True, inline="always")
+def _box_bounds(first, last, t_order, tri_lo, tri_hi, lo, hi):
+    """The bounds (lo, hi) of the triangles ``t_order[first:last]`` (one target box, as they are now)."""
+    for a in range(3):
+        lo[a], hi[a] = np.inf, -np.inf
+    for m in range(first, last):
+        t = t_order[m]
+        for a in range(3):
+            lo[a] = min(lo[a], tri_lo[t, a])
+            hi[a] = max(hi[a], tri_hi[t, a])
+
+
+@njit(cache=True, inline="always")
+def _reaches(p, p_lo, p_hi, lo, hi, r2):
+    """Whether point (or box) ``p`` comes within √r2 of the bounds (lo, hi)."""
+    d2 = 0.0
+    for a in range(3):
+        g = max(lo[a] - p_hi[p, a], 0.0, p_lo[p, a] - hi[a])
+        d2 += g * g
+    return d2 <= r2
+
+
 @njit(cache=True, parallel=True)
 def _expand_boxes(pairs, p_ptr, p_order, t_ptr, t_order, p_lo, p_hi, tri_lo, tri_hi, corners, radius, exact):
     """The (point, triangle) pairs of met clusters whose boxes come within ``radius``, and, if
     ``exact`` (points, not swept boxes), whose triangle itself does.
 
-    Each met cluster pair is tested once, in parallel, into a mask of its own slots; the pairs
-    are then written in the order of the cluster pairs (the result does not depend on the
-    thread count)."""
+    Each met cluster pair is tested once, in parallel, into a mask of its own slots (a point out of
+    reach of the target box's triangles as a whole is not tested against each of them); the pairs
+    are then written in the order of the cluster pairs (the result does not depend on the thread
+    count)."""
     r2 = radius * radius
     n = len(pairs)
     start = np.zeros(n + 1, np.int64)
@@ -313,14 +336,19 @@ def _expand_boxes(pairs, p_ptr, p_order, t_ptr, t_order, p_lo, p_hi, tri_lo, tri
     mask = np.zeros(start[n], np.uint8)
     found = np.zeros(n + 1, np.int64)
     for k in prange(n):
-        slot, hits = start[k], 0
-        for m in range(t_ptr[pairs[k, 1]], t_ptr[pairs[k, 1] + 1]):
-            t = t_order[m]
-            for q in range(p_ptr[pairs[k, 0]], p_ptr[pairs[k, 0] + 1]):
-                if _within(p_order[q], t, p_lo, p_hi, tri_lo, tri_hi, corners, r2, exact):
-                    mask[slot] = 1
+        lo, hi = np.empty(3), np.empty(3)
+        m0, m1 = t_ptr[pairs[k, 1]], t_ptr[pairs[k, 1] + 1]
+        q0, q1 = p_ptr[pairs[k, 0]], p_ptr[pairs[k, 0] + 1]
+        _box_bounds(m0, m1, t_order, tri_lo, tri_hi, lo, hi)
+        hits = 0
+        for q in range(q0, q1):
+            p = p_order[q]
+            if not _reaches(p, p_lo, p_hi, lo, hi, r2):
+                continue
+            for m in range(m0, m1):
+                if _within(p, t_order[m], p_lo, p_hi, tri_lo, tri_hi, corners, r2, exact):
+                    mask[start[k] + (m - m0) * (q1 - q0) + (q - q0)] = 1
                     hits += 1
-                slot += 1
         found[k + 1] = hits
     for k in range(n):
         found[k + 1] += found[k]
