@@ -195,12 +195,13 @@ class BodyCollider:
         keys.sort()  # grouped by vertex is all the CSR needs (a repeated pair would only be tested twice)
         return keys
 
-    def nearest(self, x, body_x, frame: int, *, cache: bool = True):
-        """Signed distance [m] (positive outside), triangle, barycentrics and normal per vertex.
+    def nearest(self, x, body_x, frame: int, *, cache: bool = True, rows=None):
+        """Signed distance [m] (positive outside), triangle, barycentrics and normal per vertex (of
+        the vertices ``rows`` only, if given (cached only): the others get none).
 
         Vertices with no body triangle within the margin get triangle −1 and distance +inf.
         """
-        found = self._closest(x, self.candidates(x, frame, cache=cache), body_x)
+        found = self._closest(x, self.candidates(x, frame, cache=cache, rows=rows), body_x, rows)
         return self._confirm_deep(x, found, body_x) if cache else found  # uncached: complete within the margin
 
     def _confirm_deep(self, x, found, body_x):
@@ -300,6 +301,18 @@ class BodyCollider:
             return np.zeros(len(x), bool)
         return seen.bound - seen.drift(body_x, self.faces).relative(x, x - seen.x) > thickness
 
+    def _far(self, x, body_x, beyond: float):
+        """(far, bound, outside): the vertices at ``x`` surely farther than ``beyond`` from the body at
+        ``body_x`` (what the last response knew of them, less how much closer the body near them
+        came relative to them since) and those two lower bounds for every vertex, as
+        :class:`LastResponse` keeps them; (None, None, None) before a response of this numbering."""
+        seen = self._seen
+        if seen is None or len(seen.x) != len(x):
+            return None, None, None
+        closer = seen.drift(body_x, self.faces).relative(x, x - seen.x)
+        bound = seen.bound - closer
+        return bound > beyond, bound, seen.outside - closer
+
     def _surely_outside(self, x, body_x) -> np.ndarray:
         """Vertices at ``x`` that cannot have entered the body at ``body_x``: found outside at the last
         response, within :attr:`sure` (where the side is certain), by more than they have moved
@@ -315,19 +328,28 @@ class BodyCollider:
         A vertex found deeper than :attr:`sure` either crossed the surface this step (it was
         outside before: push it back) or lies near the far side of a thin or concave part (armpit,
         crotch) where the closest triangle is not the one it entered by: those are left. A resting
-        band above the thickness keeps resting contact from flickering on and off.
+        band above the thickness keeps resting contact from flickering on and off. Vertices surely
+        farther off than 1.5 thicknesses (:meth:`_far`: most of a hanging garment) are not looked
+        at: they get none, and keep what the last response knew of them, less their drift since.
         """
-        dist, tri, bary, normal = self.nearest(x, body_x, frame)
+        far, bound, outside = self._far(x, body_x, 1.5 * np.max(thickness))
+        dist, tri, bary, normal = self.nearest(x, body_x, frame, rows=None if far is None else np.flatnonzero(~far))
         # the cached candidates hold every triangle within ``sure``: a distance found is exact up to
         # there, and none found (or a farther one) means at least that
         sure = self.sure
-        self._seen = LastResponse(x.copy(), np.minimum(np.where(tri >= 0, dist, np.inf), sure), body_x,
-                                  np.where((tri >= 0) & (dist > 0.0) & (dist < sure), dist, 0.0), sure)
+        near_bound = np.minimum(np.where(tri >= 0, dist, np.inf), sure)
+        near_outside = np.where((tri >= 0) & (dist > 0.0) & (dist < sure), dist, 0.0)
+        if far is not None:  # not looked at: what the last response knew, less how much closer they may have come
+            near_bound[far], near_outside[far] = bound[far], np.maximum(outside[far], 0.0)
+        self._seen = LastResponse(x.copy(), near_bound, body_x, near_outside, sure)
         prev = self._previous if self._previous is not None and len(self._previous) == len(dist) else None
         crossed = (prev >= 0.0) & (dist < 0.0) if prev is not None else np.zeros(len(dist), bool)
         plausible = (dist > -sure) | crossed
         hit = np.flatnonzero((tri >= 0) & (dist < 1.5 * thickness) & plausible)
-        self._previous = np.where(tri >= 0, dist, np.inf)
+        previous = np.where(tri >= 0, dist, np.inf)
+        if far is not None and prev is not None:
+            previous[far] = prev[far]
+        self._previous = previous
         self._previous[hit] = per_vertex(thickness, hit)  # pushed back out by the response
         return hit, dist, tri, bary, normal
 
