@@ -406,9 +406,7 @@ class ContactPipeline:
         if self.body is None:
             return 0.0
         bx, _, k = self.motion.at(t)
-        dist, tri, _, _ = self.body.nearest(x, bx, k)
-        inside = dist[tri >= 0]
-        return float(max(0.0, -inside.min())) if len(inside) else 0.0
+        return self.body.depth(x, bx, k)
 
     def self_report(self) -> dict:
         """What the self-collision pass did, for report.json."""

@@ -335,6 +335,36 @@ def test_vertices_that_moved_inside_after_a_response_are_still_rescued():
     assert np.all(np.linalg.norm(state.x[:2], axis=1) > 0.2)
 
 
+def test_a_response_skips_far_vertices_and_still_catches_one_that_came_near_and_the_depth_sees_it():
+    """A response does not look at the vertices surely farther than 1.5 thicknesses (what the last one
+    knew, less their drift since); one moved into the body after it is looked at, responded to, and
+    counted by :meth:`BodyCollider.depth`, which skips only those surely outside."""
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.2)
+    model, x0 = sheet(6, 6, 0.01, "cotton", vertical=False)
+    from tailor.collide import body_gap
+
+    body = np.asarray(ball.vertices)
+    x = x0 - x0.mean(axis=0) + [0.0, 0.0, 0.209]  # 8 mm or more over the ball: far, for a 2 mm thickness
+    resting = np.argsort(np.linalg.norm(x[:, :2], axis=1))[:3]
+    x[resting, 2] -= body_gap(x[resting], body, ball.faces)[0] - 0.0018  # three resting, 1.8 mm up
+    state = model.state(x, np.zeros_like(x))
+    collider = BodyCollider(body[None], ball.faces, margin=0.03)
+    contacts = collider.respond(model, state, 0.01, body, np.zeros_like(body), 0, thickness=0.002, friction=0.3)
+    assert sorted(contacts.ids.tolist()) == sorted(resting.tolist())
+    assert collider.depth(state.x, body, 0) == 0.0
+    far, _, _ = collider._far(state.x, body, 0.003)
+    assert far.sum() == len(x) - 3 and not far[resting].any()
+    looked = []
+    original = collider._closest
+    collider._closest = lambda x, spans, bx, rows=None: looked.append(rows) or original(x, spans, bx, rows)
+    state.x[10, 2] -= body_gap(state.x[10:11], body, ball.faces)[0][0] + 0.005  # pushed 5 mm into the ball since
+    assert abs(collider.depth(state.x, body, 0) - 0.005) < 0.0005
+    assert 10 in looked[-1] and 20 not in looked[-1]
+    hit = collider.respond(model, state, 0.01, body, np.zeros_like(body), 0, thickness=0.002, friction=0.3)
+    assert 10 in hit.ids and 20 not in looked[-1]
+    assert np.linalg.norm(state.x[10]) > 0.2015 and collider.depth(state.x, body, 0) == 0.0
+
+
 def test_a_broad_phase_over_a_span_of_walking_frames_finds_at_each_frame_the_pairs_of_that_frame_alone():
     """The body's FCL boxes are built once per BODY_SPAN frames, round where each triangle is over
     them; each frame is still asked exactly (its own triangles), not the span's boxes."""

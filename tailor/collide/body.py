@@ -204,6 +204,15 @@ class BodyCollider:
         found = self._closest(x, self.candidates(x, frame, cache=cache, rows=rows), body_x, rows)
         return self._confirm_deep(x, found, body_x) if cache else found  # uncached: complete within the margin
 
+    def depth(self, x, body_x, frame: int) -> float:
+        """How deep [m] the deepest of the points ``x`` (the cloth's vertices) is inside the body at
+        ``body_x`` (0: none). Those surely outside since the last response (:meth:`_far`: resting on
+        the body at the thickness, most of them) are not looked at."""
+        _, _, outside = self._far(x, body_x, 0.0)
+        dist, tri, _, _ = self.nearest(x, body_x, frame, rows=None if outside is None else np.flatnonzero(outside <= 0.0))
+        inside = dist[tri >= 0]
+        return float(max(0.0, -inside.min())) if len(inside) else 0.0
+
     def _confirm_deep(self, x, found, body_x):
         """``found`` with the vertices read deeper than :attr:`sure` checked against the closed surface.
 
