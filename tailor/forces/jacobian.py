@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from ..geometry import hinge_angle_gradients
 from .kawabata import secant_hinge_stiffness, secant_membrane_stiffness
-from .kernels import bending_jacobian_into, bending_system_into, element_colors, membrane_jacobian_into, membrane_system_into
+from .kernels import ELEMENT_CHUNK, bending_jacobian_into, bending_system_into, element_chunks, membrane_jacobian_into, membrane_system_into
 from .membrane import membrane_gradients
 
 __all__ = ["SparsePattern", "BlockPart", "force_jacobians", "jacobian_data", "jacobian_blocks", "implicit_blocks",
@@ -169,9 +169,11 @@ class SparsePattern:
         return np.concatenate([pos.reshape(-1) for pos in self.positions] + [self.diagonal_slots])
 
     def colors(self, group: int):
-        """(order, ptr) of element group ``group`` in classes that share no vertex (:func:`element_colors`), made once."""
+        """(order, tasks, classes) of element group ``group`` in chunks of neighbours, coloured in classes
+        whose chunks share no vertex (:func:`element_chunks`), made once."""
         if self._colors[group] is None:
-            self._colors[group] = element_colors(self._groups[group], self.shape[0] // 3)
+            self._colors[group] = element_chunks(np.ascontiguousarray(self._groups[group], np.int64), self.shape[0] // 3,
+                                                 ELEMENT_CHUNK)
         return self._colors[group]
 
     def colors_moving(self, group: int, still):
@@ -180,14 +182,15 @@ class SparsePattern:
         nothing to K·v and only to blocks of pinned rows and columns, which the solve replaces by
         the identity, so leaving it out of the assembly changes nothing. Remembered for the last
         mask asked."""
-        order, ptr = self.colors(group)
+        order, tasks, classes = self.colors(group)
         if not still.any():
-            return order, ptr
+            return order, tasks, classes
         last = self._moving[group]
         if last is None or not np.array_equal(last[0], still):
             keep = ~still[self._groups[group][order]].all(axis=1)
-            counts = np.bincount(np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))[keep], minlength=len(ptr) - 1)
-            self._moving[group] = last = (still.copy(), (order[keep], np.concatenate([[0], np.cumsum(counts)]).astype(ptr.dtype)))
+            counts = np.bincount(np.repeat(np.arange(len(tasks) - 1), np.diff(tasks))[keep], minlength=len(tasks) - 1)
+            self._moving[group] = last = (still.copy(), (order[keep], np.concatenate([[0], np.cumsum(counts)]).astype(tasks.dtype),
+                                                         classes))
         return last[1]
 
     def blocks(self, data) -> np.ndarray:

@@ -22,7 +22,8 @@ __all__ = [
     "bending_jacobian_into",
     "membrane_system_into",
     "bending_system_into",
-    "element_colors",
+    "element_chunks",
+    "ELEMENT_CHUNK",
     "face_stretch_into",
 ]
 
@@ -256,24 +257,26 @@ def _add_element(e, nodes, slots, kf, cf, v, dt, blocks, kv):
                 kv[ia, r] += acc
 
 
-_CLASS_CHUNK = 256
-"""Elements of a colour class per parallel task (scratch arrays are made once a task)."""
+ELEMENT_CHUNK = 128
+"""Elements of one parallel task of the assembly (:func:`element_chunks`): neighbours in the mesh,
+their blocks a few kilobytes, kept in cache while the chunk adds to them."""
 
 
 @njit(cache=True, parallel=True)
-def _membrane_system(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, slots, order, cptr, dt, blocks, kv):
-    """Faces' Δt·C + Δt²·K into 3×3 blocks and K·v, one colour class of faces at a time.
+def _membrane_system(x, v, faces, dm, area, k1, k2, k12, p1, p2, p12, slots, order, tasks, classes, dt, blocks, kv):
+    """Faces' Δt·C + Δt²·K into 3×3 blocks and K·v, one colour class of chunks at a time
+    (:func:`element_chunks`).
 
-    No two faces of a class share a vertex, so a class runs in parallel without write conflicts
-    and every block sums its faces in one order (the class order) on any thread count.
+    No two chunks of a class share a vertex, so a class's chunks run in parallel without write
+    conflicts, each in its own order, and every block sums its faces in one order on any thread
+    count; a chunk's faces share most of their vertices, so their blocks stay in cache.
     """
-    for col in range(len(cptr) - 1):
-        lo, hi = cptr[col], cptr[col + 1]
-        for task in prange((hi - lo + _CLASS_CHUNK - 1) // _CLASS_CHUNK):
+    for col in range(len(classes) - 1):
+        for task in prange(classes[col], classes[col + 1]):
             g = np.empty((3, 9))
             kf = np.empty((9, 9))
             cf = np.empty((9, 9))
-            for t in range(lo + task * _CLASS_CHUNK, min(hi, lo + (task + 1) * _CLASS_CHUNK)):
+            for t in range(tasks[task], tasks[task + 1]):
                 f = order[t]
                 _membrane_face(f, x, faces, dm, area, k1, k2, k12, p1, p2, p12, g, kf, cf)
                 _add_element(f, faces, slots, kf, cf, v, dt, blocks, kv)
@@ -322,14 +325,14 @@ def _bending_jacobian(x, hinges, stiffness, pos, kdata):
 
 
 @njit(cache=True, parallel=True)
-def _bending_system(x, v, hinges, stiffness, slots, order, cptr, dt, blocks, kv):
-    """Hinges' Δt²·k·∇θ∇θᵀ into 3×3 blocks and K·v = k·∇θ·(∇θ·v), one colour class of hinges at a time."""
+def _bending_system(x, v, hinges, stiffness, slots, order, tasks, classes, dt, blocks, kv):
+    """Hinges' Δt²·k·∇θ∇θᵀ into 3×3 blocks and K·v = k·∇θ·(∇θ·v), one colour class of chunks at a
+    time (as :func:`_membrane_system`)."""
     dt2 = dt * dt
-    for col in range(len(cptr) - 1):
-        lo, hi = cptr[col], cptr[col + 1]
-        for task in prange((hi - lo + _CLASS_CHUNK - 1) // _CLASS_CHUNK):
+    for col in range(len(classes) - 1):
+        for task in prange(classes[col], classes[col + 1]):
             g = np.empty(12)
-            for t in range(lo + task * _CLASS_CHUNK, min(hi, lo + (task + 1) * _CLASS_CHUNK)):
+            for t in range(tasks[task], tasks[task + 1]):
                 h = order[t]
                 if not _hinge_gradient(h, x, hinges, g):
                     continue
@@ -350,37 +353,61 @@ def _bending_system(x, v, hinges, stiffness, slots, order, cptr, dt, blocks, kv)
 
 
 @njit(cache=True)
-def element_colors(nodes, vertex_count):
-    """(order, ptr): elements (rows of vertex ids) in classes none of whose elements share a vertex;
-    class c is ``order[ptr[c]:ptr[c+1]]``, in increasing element order. Greedy over at most 64
-    classes (vertex bit masks); an element that would need a 65th gets a class of its own."""
+def element_chunks(nodes, vertex_count, chunk):
+    """(order, tasks, classes): the elements (rows of vertex ids) sorted by their lowest vertex and
+    cut into chunks of ``chunk``, the chunks coloured so that none of a class shares a vertex with
+    another of it. Chunk k's elements are ``order[tasks[k]:tasks[k+1]]``; class c's chunks are
+    ``classes[c]`` to ``classes[c+1]``. A mesh numbers its vertices panel by panel, row by row, so a
+    chunk is a patch of neighbours: an assembly adding a chunk at a time touches a few kilobytes of
+    blocks instead of sweeping the whole matrix once per colour class of single elements.
+    Greedy over at most 64 classes (vertex bit masks); a chunk that would need a 65th gets a class
+    of its own."""
+    n, k = nodes.shape[0], nodes.shape[1]
+    low = np.empty(n, np.int64)
+    for e in range(n):
+        m = nodes[e, 0]
+        for a in range(1, k):
+            m = min(m, nodes[e, a])
+        low[e] = m
+    by_vertex = np.argsort(low, kind="mergesort")
+    chunks = (n + chunk - 1) // chunk
     masks = np.zeros(vertex_count, np.uint64)
-    color = np.empty(len(nodes), np.int64)
-    extra = 64
-    one = np.uint64(1)
-    for e in range(len(nodes)):
+    color = np.empty(chunks, np.int64)
+    one, extra = np.uint64(1), 64
+    for c in range(chunks):
         used = np.uint64(0)
-        for a in range(nodes.shape[1]):
-            used |= masks[nodes[e, a]]
-        c = 0
-        while c < 64 and (used >> np.uint64(c)) & one:
-            c += 1
-        if c == 64:
-            color[e] = extra
+        for t in range(c * chunk, min(n, (c + 1) * chunk)):
+            for a in range(k):
+                used |= masks[nodes[by_vertex[t], a]]
+        col = 0
+        while col < 64 and (used >> np.uint64(col)) & one:
+            col += 1
+        if col == 64:
+            color[c] = extra
             extra += 1
             continue
-        color[e] = c
-        for a in range(nodes.shape[1]):
-            masks[nodes[e, a]] |= one << np.uint64(c)
-    order = np.argsort(color, kind="mergesort")
-    counts = np.bincount(color) if len(color) else np.zeros(0, np.int64)
-    ptr = np.zeros(len(counts) + 1, np.int64)
-    k = 0
+        color[c] = col
+        for t in range(c * chunk, min(n, (c + 1) * chunk)):
+            for a in range(k):
+                masks[nodes[by_vertex[t], a]] |= one << np.uint64(col)
+    sequence = np.argsort(color, kind="mergesort")
+    order = np.empty(n, np.int64)
+    tasks = np.zeros(chunks + 1, np.int64)
+    counts = np.bincount(color) if chunks else np.zeros(0, np.int64)
+    classes = np.zeros(len(counts) + 1, np.int64)
+    at = 0
+    for j in range(chunks):
+        c = sequence[j]
+        for t in range(c * chunk, min(n, (c + 1) * chunk)):
+            order[at] = by_vertex[t]
+            at += 1
+        tasks[j + 1] = at
+    m = 0
     for c in range(len(counts)):
         if counts[c]:
-            k += 1
-            ptr[k] = ptr[k - 1] + counts[c]
-    return order, ptr[: k + 1]
+            m += 1
+            classes[m] = classes[m - 1] + counts[c]
+    return order, tasks, classes[: m + 1]
 
 
 def membrane_jacobian_into(model, x, positions, kdata, cdata, *, stiffness=None) -> None:

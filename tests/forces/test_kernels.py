@@ -59,18 +59,24 @@ def test_implicit_blocks_are_the_jacobians_of_the_reference(deformed, pairs):
     assert np.abs(kv.reshape(-1) - ref_kv).max() <= 1e-12 * np.abs(ref_kv).max()
 
 
-def test_element_colour_classes_share_no_vertex_and_cover_every_element():
-    from tailor.forces.kernels import element_colors
+def test_element_chunks_of_a_class_share_no_vertex_and_cover_every_element_once():
+    from tailor.forces.kernels import element_chunks
 
-    model, _ = sheet(30, 20, 0.03, "denim", vertical=False)
+    model, _ = sheet(60, 40, 0.02, "denim", vertical=False)
     for nodes in (model.faces, model.hinge_vertices):
-        order, ptr = element_colors(np.asarray(nodes, np.int64), model.vertex_count)
+        nodes = np.asarray(nodes, np.int64)
+        order, tasks, classes = element_chunks(nodes, model.vertex_count, 16)
         assert sorted(order) == list(range(len(nodes)))
-        assert len(ptr) - 1 <= 24  # a triangle mesh needs about its largest vertex valence
-        for c in range(len(ptr) - 1):
-            members = np.asarray(nodes)[order[ptr[c] : ptr[c + 1]]].reshape(-1)
-            assert len(np.unique(members)) == len(members)
-            assert np.all(np.diff(order[ptr[c] : ptr[c + 1]]) > 0)
+        assert tasks[0] == 0 and tasks[-1] == len(nodes) and np.all(np.diff(tasks) > 0) and np.diff(tasks).max() == 16
+        assert classes[0] == 0 and classes[-1] == len(tasks) - 1
+        assert len(classes) - 1 <= 16 < len(tasks) - 1  # chunks of neighbours meet a few others
+        for c in range(len(classes) - 1):
+            members = [np.unique(nodes[order[tasks[k]:tasks[k + 1]]]) for k in range(classes[c], classes[c + 1])]
+            joined = np.concatenate(members)
+            assert len(np.unique(joined)) == len(joined)  # no vertex in two chunks of a class
+        low = nodes.min(axis=1)[order]
+        for k in range(len(tasks) - 1):
+            assert np.all(np.diff(low[tasks[k]:tasks[k + 1]]) >= 0)  # a chunk in order of its lowest vertex
 
 
 def test_stiffness_is_symmetric_positive_semidefinite_and_predicts_force_change(deformed):
@@ -114,7 +120,7 @@ def test_elements_pinned_at_rest_are_left_out_and_change_nothing_the_solve_keeps
     held = model.with_pins(np.flatnonzero(pinned))
     start = held.state(x, v)
     pattern = SparsePattern(held)
-    order, _ = pattern.colors_moving(0, pinned)
+    order, _, _ = pattern.colors_moving(0, pinned)
     faces = np.asarray(held.faces)
     still_faces = np.flatnonzero(pinned[faces].all(axis=1))
     assert len(still_faces) > 100 and np.array_equal(np.sort(np.concatenate([order, still_faces])), np.arange(len(faces)))
