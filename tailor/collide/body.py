@@ -206,10 +206,9 @@ class BodyCollider:
 
     def depth(self, x, body_x, frame: int) -> float:
         """How deep [m] the deepest of the points ``x`` (the cloth's vertices) is inside the body at
-        ``body_x`` (0: none). Those surely outside since the last response (:meth:`_far`: resting on
-        the body at the thickness, most of them) are not looked at."""
-        _, _, outside = self._far(x, body_x, 0.0)
-        dist, tri, _, _ = self.nearest(x, body_x, frame, rows=None if outside is None else np.flatnonzero(outside <= 0.0))
+        ``body_x`` (0: none). Those surely outside since the last response (:meth:`_surely_outside`:
+        resting on the body at the thickness, most of them) are not looked at."""
+        dist, tri, _, _ = self.nearest(x, body_x, frame, rows=np.flatnonzero(~self._surely_outside(x, body_x)))
         inside = dist[tri >= 0]
         return float(max(0.0, -inside.min())) if len(inside) else 0.0
 
@@ -305,16 +304,15 @@ class BodyCollider:
         """Vertices at ``x`` that cannot be within ``thickness`` of the body at ``body_x``: their distance
         at the last response, less how much closer the body near them has come since (their motion
         relative to it, :class:`~tailor.collide.drift.BodyDrift`), still exceeds it."""
-        seen = self._seen
-        if seen is None or len(seen.x) != len(x):
-            return np.zeros(len(x), bool)
-        return seen.bound - seen.drift(body_x, self.faces).relative(x, x - seen.x) > thickness
+        far = self._far(x, body_x, thickness)[0]
+        return np.zeros(len(x), bool) if far is None else far
 
-    def _far(self, x, body_x, beyond: float):
+    def _far(self, x, body_x, beyond):
         """(far, bound, outside): the vertices at ``x`` surely farther than ``beyond`` from the body at
         ``body_x`` (what the last response knew of them, less how much closer the body near them
-        came relative to them since) and those two lower bounds for every vertex, as
-        :class:`LastResponse` keeps them; (None, None, None) before a response of this numbering."""
+        came relative to them since; ``beyond`` [m] one for all or (N,) each vertex's own) and those
+        two lower bounds for every vertex, as :class:`LastResponse` keeps them; (None, None, None)
+        before a response of this numbering."""
         seen = self._seen
         if seen is None or len(seen.x) != len(x):
             return None, None, None
@@ -326,10 +324,8 @@ class BodyCollider:
         """Vertices at ``x`` that cannot have entered the body at ``body_x``: found outside at the last
         response, within :attr:`sure` (where the side is certain), by more than they have moved
         relative to the body near them since (to reach its inside they must cross its surface)."""
-        seen = self._seen
-        if seen is None or len(seen.x) != len(x):
-            return np.zeros(len(x), bool)
-        return seen.outside - seen.drift(body_x, self.faces).relative(x, x - seen.x) > 0.0
+        outside = self._far(x, body_x, 0.0)[2]
+        return np.zeros(len(x), bool) if outside is None else outside > 0.0
 
     def _hits(self, x, body_x, frame, thickness):
         """The vertices to respond to: (hit ids, dist, tri, bary, normal) of all vertices.
