@@ -7,8 +7,9 @@ patterns refer to them by these names so one pattern dresses many bodies.
 
 __all__ = ["TORSO_LANDMARKS", "LIMB_LANDMARKS", "LANDMARKS"]
 
-TORSO_LANDMARKS = ("neck", "shoulders", "chest", "bust", "underbust", "waist", "hips", "crotch")
-"""Cross-sections of the trunk, top to bottom (``bust`` is an alias of ``chest``)."""
+TORSO_LANDMARKS = ("neck", "shoulders", "armpits", "chest", "bust", "underbust", "waist", "hips", "crotch")
+"""Cross-sections of the trunk, top to bottom (``bust`` is an alias of ``chest``; ``armpits`` is the
+trunk's last cut below the arms, where an armhole's lowest point belongs)."""
 
 LIMB_LANDMARKS = (
     "left_upper_arm", "right_upper_arm", "left_elbow", "right_elbow", "left_wrist", "right_wrist",

@@ -207,6 +207,7 @@ def _torso(p: Profile):
                         f"({za * 100:.0f} cm); tailor needs {POSES}")
     out = {name: _landmark(name, p.trunk(k), z[k]) for name, k in found.items()}
     out["chest"] = Landmark("chest", *[getattr(out["bust"], f) for f in ("center", "axis", "girth", "width", "depth")])
+    out["armpits"] = _landmark("armpits", p.trunk(ka), za)
     neck_w = out["neck"].width
     kn = found["neck"]
     ks = next((k for k in range(ka + 1, kn) if p.width[k] < 2.0 * neck_w), kn)

@@ -186,14 +186,20 @@ def garment_of_vertex(pattern: Pattern, vertex_panel) -> np.ndarray:
     return out
 
 
-def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02, loose=None) -> np.ndarray:
+def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02, loose=None, edge=None) -> np.ndarray:
     """(G, G) counts: entry (i, j), i < j, is how many of garment j's vertices lie within ``reach``
-    [m] of garment i's and nearer the body than the nearest of them — an outer garment's cloth
-    inside an inner one's. All zero when every garment keeps its layer. ``garment`` is
-    :func:`garment_of_vertex`; distances to the body are :func:`tailor.collide.body_gap`'s.
+    [m] of garment i's and nearer the body than the nearest of them, over the same side of the body
+    (their nearest body points' normals within 90°) — an outer garment's cloth inside an inner one's.
+    In a crease (an armpit, a crotch) a sleeve's cloth on the arm and a bodice's on the trunk face
+    each other across the gap: neither lies inside the other. All zero when every garment keeps its
+    layer. ``garment`` is :func:`garment_of_vertex`; distances and normals are
+    :func:`tailor.collide.body_gap`'s.
     ``loose`` (N,) int, optional: per vertex, a garment it keeps no order against (a tucked top's
     cloth above the band, which may lie over it: :meth:`tailor.dress.garment.Garment.untucked`);
     a vertex whose nearest is such a vertex of the other garment is not counted.
+    ``edge`` (N,) bool, optional: the vertices on a garment's open edges (hem, armholes, neckline);
+    a vertex whose nearest is on an inner garment's edge is beyond that garment, not inside it (a
+    sleeve reaching the body through a dress's armhole, the armhole's edge lifted beside it).
     """
     from scipy.spatial import cKDTree
 
@@ -210,17 +216,19 @@ def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02, loose=N
             d, k = tree.query(x[outer], distance_upper_bound=reach)
             found = np.flatnonzero(np.isfinite(d))
             pair_outer, pair_inner = outer[found], inner[k[found]]
+            keep = np.ones(len(pair_inner), bool) if edge is None else ~np.asarray(edge, bool)[pair_inner]
             if loose is not None:
-                keep = (loose[pair_inner] != j) & (loose[pair_outer] != i)
-                pair_outer, pair_inner = pair_outer[keep], pair_inner[keep]
+                keep &= (loose[pair_inner] != j) & (loose[pair_outer] != i)
+            pair_outer, pair_inner = pair_outer[keep], pair_inner[keep]
             near.append((i, j, pair_outer, pair_inner))
     ids = np.unique(np.concatenate([np.r_[a, b] for _, _, a, b in near] + [np.zeros(0, np.intp)]))
-    gap = np.zeros(len(x))
+    gap, normal = np.zeros(len(x)), np.zeros((len(x), 3))
     if len(ids):  # the body's distance only where two garments overlap: the costly query
-        gap[ids] = body_gap(x[ids], body_x, body_faces)[0]
+        gap[ids], normal[ids] = body_gap(x[ids], body_x, body_faces)
     out = np.zeros((count, count), np.intp)
     for i, j, outer, nearest in near:
-        out[i, j] = int(np.count_nonzero(gap[outer] < gap[nearest]))
+        same_side = np.einsum("ij,ij->i", normal[outer], normal[nearest]) > 0.0
+        out[i, j] = int(np.count_nonzero((gap[outer] < gap[nearest]) & same_side))
     return out
 
 

@@ -33,7 +33,7 @@ def assert_known_girths(body, marks):
 def assert_sane(body, marks, vertices):
     """Every landmark, in the order a body has them, on its own side."""
     assert set(LANDMARKS) <= set(marks), body.name
-    h = [marks[k].height for k in ("left_ankle", "left_knee", "crotch", "hips", "waist", "bust", "neck")]
+    h = [marks[k].height for k in ("left_ankle", "left_knee", "crotch", "hips", "waist", "bust", "armpits", "neck")]
     assert np.all(np.diff(h) > 0), f"{body.name}: landmark heights out of order {np.round(h, 3)}"
     assert marks["waist"].girth < marks["hips"].girth and marks["neck"].girth < marks["waist"].girth, body.name
     for side, sign in (("left", 1), ("right", -1)):

@@ -27,6 +27,7 @@ from ..limbwalls import limb_walls
 from ..placement import place_panels
 from ..sim import quality as sim_quality
 from ..sizing import check_loops
+from ..topology import boundary_edges
 from .garment import Garment, layer_spacing
 from .options import DRAPE_RESOLUTION, SETTLE_QUALITY, DrapeOptions
 from .phases import Dressing, animate, settle, sew, transition
@@ -218,9 +219,13 @@ def _out_of_layer(d: Dressing, body) -> list | None:
     if not pattern.pieces or d.topology:
         return None
     garment = garment_of_vertex(pattern, mesh.vertex_panel)
+    weld = d.garment.weld
     loose = d.garment.untucked()
-    loose = None if loose is None else loose[d.garment.weld]  # the frames' (mesh) numbering
-    return [int(out_of_order(x, garment, bx, body.faces, loose=loose).sum()) for x, bx in zip(d.frames, d.body_frames)]
+    loose = None if loose is None else loose[weld]  # the frames' (mesh) numbering
+    edge = np.zeros(int(weld.max()) + 1, bool)
+    edge[boundary_edges(weld[mesh.faces]).ravel()] = True  # open edges once the seams are welded
+    return [int(out_of_order(x, garment, bx, body.faces, loose=loose, edge=edge[weld]).sum())
+            for x, bx in zip(d.frames, d.body_frames)]
 
 
 def _close(report: DrapeReport, d: Dressing, t_start: float, body) -> None:
