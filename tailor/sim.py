@@ -179,7 +179,8 @@ class Stepper:
     def _step(self, model, state, h: float, depth: int):
         """(new state, whether it ends overstretched). A step whose end, after the contact responses,
         stretches a triangle beyond the guard's ``max_stretch`` (a flap swung through the response
-        of a fold, a corner caught between two contacts) is undone, the contacts restored to what
+        of a fold, a corner caught between two contacts), or whose responses stop it as unstable (the
+        self-contact's: part of the cloth too fast for its candidates), is undone, the contacts restored to what
         they knew before it (:meth:`ContactPipeline.checkpoint`), and taken as two half steps, up to
         ``guard.retries`` deep: Baraff & Witkin's adaptive step size (1998) applied to the whole
         step, contacts included, where :class:`~tailor.integrators.ImplicitEuler` applies it to its
@@ -187,8 +188,13 @@ class Stepper:
         pipe = self.contacts
         retry = depth < self.guard.retries and model.face_count > 0
         mark = pipe.checkpoint() if retry and pipe is not None else None
-        new = self._take(model, state, h)
-        over = model.face_count > 0 and max_stretch(model, new.x) > self.guard.max_stretch
+        try:
+            new = self._take(model, state, h)
+        except SimulationUnstable:  # a response's own guard (cloth moving too fast for its contacts)
+            if not retry:
+                raise
+            new = None
+        over = new is None or (model.face_count > 0 and max_stretch(model, new.x) > self.guard.max_stretch)
         if over and retry:
             self.retried += 1
             if pipe is not None:

@@ -94,6 +94,31 @@ def test_a_step_its_contacts_overstretch_is_taken_again_in_halves():
     assert never.retried == 2  # Δt/2, then Δt/4: no smaller step helped
 
 
+class _Refusing(_Recorder):
+    """A contact response that stops a step longer than ``longest`` as unstable (as the self-contact's
+    guard stops cloth moving too fast for its candidates)."""
+
+    def __init__(self, longest):
+        super().__init__()
+        self.longest = longest
+
+    def respond(self, model, state, dt, impulses, support):
+        super().respond(model, state, dt, impulses, support)
+        if dt > self.longest:
+            raise SimulationUnstable("too fast for the contacts")
+
+
+def test_a_step_its_contacts_call_unstable_is_taken_again_in_halves():
+    model, x0 = sheet(10, 10, 0.05, "cotton", vertical=False)
+    kept = []
+    stepper = Stepper(make_integrator("implicit"), contacts=_Refusing(0.015), hooks=[lambda m, s, dt: kept.append(dt)])
+    end = stepper.advance(model, model.state(x0), 0.04, 0.04)
+    assert stepper.retried == 3 and kept == [0.01] * 4 and end.t == pytest.approx(0.04)  # 40 → 20 → 10 ms, twice
+    never = Stepper(make_integrator("implicit"), contacts=_Refusing(0.001), guard=Guard(retries=2))
+    with pytest.raises(SimulationUnstable, match="too fast"):
+        never.advance(model, model.state(x0), 0.04, 0.04)
+
+
 def test_a_step_undone_and_taken_again_ends_where_it_did():
     """The contacts' checkpoint holds all a step changes: a cloth folding on a sphere (body and
     self-contact, held contacts, loads), a step taken, undone and taken again, ends bit for bit the same."""

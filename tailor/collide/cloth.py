@@ -80,8 +80,15 @@ REANCHOR = 0.5
 
 MAX_RELATIVE_SPEED = 20.0
 """[m/s] No part of a garment moves this fast relative to the rest of it (sewing and walking drapes
-stay under 5 m/s); a step beyond it is an exploding state, whose swept boxes would make the next
-query take minutes: it stops with :class:`SimulationUnstable` instead."""
+stay under 5 m/s); a step beyond it, and beyond :data:`MAX_RELATIVE_JUMP`, is an exploding state,
+whose swept boxes would make the next query take minutes: it stops with :class:`SimulationUnstable`
+instead."""
+
+MAX_RELATIVE_JUMP = 0.05
+"""[m] A part of the cloth may always move this far in a step, however short: the body pushing an outer
+layer out to its offset or an untangling moves a vertex millimetres between two responses, and a
+step halved to a tenth of a millisecond must not call that an explosion. The swept query's cost
+grows with the distance, not the speed."""
 
 
 def _same_mask(a, b) -> bool:
@@ -421,7 +428,7 @@ class SelfCollider:
         # found again with those that moved half as far: they would be next
         moving = None if drift is None else drift >= (REANCHOR * 0.5 * self.margin) ** 2
         step = math.inf if rxp is None else float(np.sqrt(np.einsum("ij,ij->i", rx - rxp, rx - rxp).max()))
-        if rxp is not None and step > MAX_RELATIVE_SPEED * dt:
+        if rxp is not None and step > max(MAX_RELATIVE_SPEED * dt, MAX_RELATIVE_JUMP):
             raise SimulationUnstable(
                 f"simulation unstable at t = {t:.4f} s (Δt = {dt:.3g} s): part of the cloth moved {step:.3g} m "
                 f"relative to the rest in one step ({step / dt:.3g} m/s, limit {MAX_RELATIVE_SPEED:g}); try a smaller "
