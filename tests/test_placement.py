@@ -46,9 +46,10 @@ def test_rolled_panels_start_outside_the_body_nearly_unstrained(name, mannequin)
     assert np.all(dist[~inside] > 0.0)  # nothing closer than 1 cm lies inside either
     ratio = _edge_ratios(mesh, x)
     # rows are rolled isometrically; rows rolled wider than their neighbours shear the panel by
-    # at most SLOPE = 0.1, which changes diagonal edges by at most ±5 %; chords of 3 cm edges
-    # rolled round a 5 cm arm are another 1.5 % shorter than their arcs
-    assert ratio.min() > 0.93 and ratio.max() < 1.055
+    # at most SLOPE = 0.1, which changes diagonal edges by about ±5 % (6.4 % the T-shirt's shortest
+    # diagonal at its side seam, 2 cm long); chords of 3 cm edges rolled round a 5 cm arm are
+    # another 1.5 % shorter than their arcs
+    assert ratio.min() > 0.93 and ratio.max() < 1.07
 
 
 def test_trouser_legs_rolled_round_the_thighs_would_cut_into_the_hips(mannequin):

@@ -78,17 +78,10 @@ every candidate is found again; fewer, only the pairs touching them."""
 REANCHOR = 0.5
 """A partial query also anchors again the vertices this far through their ``margin / 2``."""
 
-MAX_RELATIVE_SPEED = 20.0
-"""[m/s] No part of a garment moves this fast relative to the rest of it (sewing and walking drapes
-stay under 5 m/s); a step beyond it, and beyond :data:`MAX_RELATIVE_JUMP`, is an exploding state,
-whose swept boxes would make the next query take minutes: it stops with :class:`SimulationUnstable`
-instead."""
-
-MAX_RELATIVE_JUMP = 0.05
-"""[m] A part of the cloth may always move this far in a step, however short: the body pushing an outer
-layer out to its offset or an untangling moves a vertex millimetres between two responses, and a
-step halved to a tenth of a millisecond must not call that an explosion. The swept query's cost
-grows with the distance, not the speed."""
+MAX_RELATIVE_SPEED, MAX_RELATIVE_JUMP = 20.0, 0.05
+"""[m/s], [m] No part of a garment moves this fast relative to the rest (drapes stay under 5 m/s); a
+step beyond it and the jump (a body's push between responses, in however short a step) is an exploding
+state, whose swept query would take minutes: it stops with :class:`SimulationUnstable` instead."""
 
 
 def _same_mask(a, b) -> bool:
