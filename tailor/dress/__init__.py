@@ -25,7 +25,7 @@ from ..mesh import discretise
 from ..outfit import ease_layers, garment_of_vertex, out_of_order, outfit
 from ..limbwalls import limb_walls
 from ..placement import place_panels
-from ..sim import quality as sim_quality
+from ..sim import max_stretch, quality as sim_quality
 from ..sizing import check_loops
 from ..topology import boundary_edges
 from .garment import Garment, layer_spacing
@@ -95,6 +95,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
     report.garments = _garments(pattern, d.garment.mesh)
     state, report.phases["sewing"] = sew(d, x0)
     state, report.phases["settling"] = settle(d, state)
+    report.max_triangle_stretch_dressed = max_stretch(d.garment.model, state.x)
     state, phase = transition(d, state)
     if phase is not None:
         report.phases["transition"] = phase

@@ -25,6 +25,7 @@ from ..constraints import Gather, HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..outfit import garment_of_vertex, tuck_targets
+from ..forces.membrane import face_stretch
 from ..sim import Guard, Stepper, max_stretch
 from .options import (BLOCKED_OVER, FREE_SEW_STEP, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
                       ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
@@ -217,8 +218,20 @@ def sew(d: Dressing, x0):
             raise SimulationError(_open_seams(g, state, d.options.sew_timeout))
     sewing.route_around(None)
     sewing.step = None
+    worst, at = _most_stretched(g.model, state.x)
     return state, PhaseReport(total, time.perf_counter() - t0, frames,
-                              {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds})
+                              {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds,
+                               "max_triangle_stretch": worst, "most_stretched_at_m": at})
+
+
+def _most_stretched(model, x) -> tuple:
+    """(largest principal stretch of any triangle, its centroid [m] as a list): where sewing ended
+    tightest, a triangle caught on the body if beyond :data:`~.options.CAUGHT_STRETCH`."""
+    stretch = face_stretch(model, x)
+    if not len(stretch):
+        return 1.0, None
+    k = int(np.argmax(stretch))
+    return float(stretch[k]), np.asarray(x)[np.asarray(model.faces)[k]].mean(axis=0).round(4).tolist()
 
 
 def _sew_step(d: Dressing, garment: int) -> float | None:

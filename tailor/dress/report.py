@@ -72,7 +72,7 @@ class DrapeReport:
     active: dict
     skipped: list
     phases: dict = field(default_factory=dict)  # name → PhaseReport
-    max_triangle_stretch_dressed: float = 0.0
+    max_triangle_stretch_dressed: float = 0.0  # largest principal stretch of any triangle once settled (frame 0's state)
     max_penetration_m_per_frame: list = field(default_factory=list)
     max_penetration_m: float = 0.0
     crossings_per_frame: list = field(default_factory=list)  # edges through a triangle of the garment (tailor.collide.edge_crossings)
