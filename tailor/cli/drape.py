@@ -87,25 +87,13 @@ def _cmd_drape(args) -> int:
           + f"{time.perf_counter() - t0:.1f} s -> {out}/")
     if fits:
         print(describe(fits, out / "fit"))
-    for warning in (crossing_warning(r.crossings_per_frame, args.self_collision), caught_warning(r.phases["sewing"].extra)):
-        if warning:
-            print(warning, file=sys.stderr)
+    warning = crossing_warning(r.crossings_per_frame, args.self_collision)
+    if warning:
+        print(warning, file=sys.stderr)
     if max(r.out_of_layer_per_frame or [0]):
         print(f"tailor: warning: garments out of their layer order: up to {max(r.out_of_layer_per_frame)} vertices "
               f"inside a garment they should be over (report.json out_of_layer_per_frame)", file=sys.stderr)
     return 0
-
-
-def caught_warning(sewing: dict) -> str | None:
-    """The warning for a garment that ended sewing caught on the body (None: it did not)."""
-    from ..dress.options import CAUGHT_STRETCH
-
-    worst, at = sewing.get("max_triangle_stretch", 1.0), sewing.get("most_stretched_at_m")
-    if worst <= CAUGHT_STRETCH or at is None:
-        return None
-    return (f"tailor: warning: sewing ended with a triangle at ({at[0]:.3f}, {at[1]:.3f}, {at[2]:.3f}) m stretched "
-            f"{worst:.2g}× its size: caught on the body (an armhole or opening too small, or placed too high, for "
-            f"where it sits); report.json phases.sewing")
 
 
 def crossing_warning(crossings, self_collision: str) -> str | None:

@@ -177,11 +177,6 @@ SEWING = PhaseSettings(
     max_stretch_change=math.inf, wind=False,
     # a corner pulled three ways may stretch its triangles this far before merging
     max_stretch=10.0, moving=False)
-CAUGHT_STRETCH = 2.0
-"""A triangle stretched beyond this when sewing ends is caught on the body: an armhole or opening
-pulled up into a crease it is too small or too high for (the shipped dress's armhole, 4 cm too
-shallow, ended at 5.5×; sewn garments that sit end at 1.5–1.65×). ``tailor drape`` warns, naming
-where (report.json ``phases.sewing``); settling usually frees it, an outer garment sewn over it may not."""
 FREE_SEW_STEP = 0.02
 """[s] The step a garment's sewing takes when it holds none of its heights (a T-shirt, a dress; not
 yet an outfit's stages): its seams close in about as much simulated time as at the plain 10 ms
