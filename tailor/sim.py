@@ -108,6 +108,16 @@ def max_stretch(model, x) -> float:
     return float(face_stretch(model, x).max(initial=1.0))
 
 
+def most_stretched(model, x) -> tuple:
+    """(largest principal stretch of any triangle, that triangle's centroid (3,) [m], None without
+    triangles): where a cloth is tightest."""
+    stretch = face_stretch(model, x)
+    if not len(stretch):
+        return 1.0, None
+    k = int(np.argmax(stretch))
+    return float(max(stretch[k], 1.0)), np.asarray(x)[np.asarray(model.faces)[k]].mean(axis=0)
+
+
 def _remedy(integrator: str, dt: float) -> str:
     tips = [f"a smaller time step (e.g. {dt / 4:.3g} s)"]
     if integrator != "implicit":
@@ -128,10 +138,8 @@ def check_state(model, state, *, step: int, dt: float, integrator: str = "?", fr
             f"simulation unstable at {where}: a vertex moves at {speed:.3g} m/s (limit {guard.max_speed:g}); {_remedy(integrator, dt)}"
         )
     if strain and model.face_count:
-        stretch = face_stretch(model, state.x)
-        s = float(stretch.max(initial=1.0))
+        s, at = most_stretched(model, state.x)
         if s > guard.max_stretch:
-            at = np.asarray(state.x)[np.asarray(model.faces)[int(np.argmax(stretch))]].mean(axis=0)
             raise SimulationUnstable(
                 f"simulation unstable at {where}: a triangle at ({at[0]:.3f}, {at[1]:.3f}, {at[2]:.3f}) m is stretched "
                 f"{s:.3g}× its rest size (limit {guard.max_stretch:g}×); {_remedy(integrator, dt)}"

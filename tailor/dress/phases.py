@@ -25,8 +25,7 @@ from ..constraints import Gather, HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
 from ..outfit import garment_of_vertex, tuck_targets
-from ..forces.membrane import face_stretch
-from ..sim import Guard, Stepper, max_stretch
+from ..sim import Guard, Stepper, max_stretch, most_stretched
 from .options import (BLOCKED_OVER, FREE_SEW_STEP, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
                       ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
                       TUCK_ROW, WELD_BATCH, DrapeOptions, PhaseSettings)
@@ -218,21 +217,12 @@ def sew(d: Dressing, x0):
             raise SimulationError(_open_seams(g, state, d.options.sew_timeout))
     sewing.route_around(None)
     sewing.step = None
-    worst, at = _most_stretched(g.model, state.x)
+    # where sewing ended tightest: a garment caught on the body shows there (the shipped dress's
+    # armholes, cut 4 cm too shallow, ended 2.4–5.5× under an arm); so do held waistbands (2.3–5×)
+    worst, at = most_stretched(g.model, state.x)
     return state, PhaseReport(total, time.perf_counter() - t0, frames,
-                              {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds,
-                               "max_triangle_stretch": worst, "most_stretched_at_m": at})
-
-
-def _most_stretched(model, x) -> tuple:
-    """(largest principal stretch of any triangle, its centroid [m] as a list): where sewing ended
-    tightest. A garment caught on the body shows there (the shipped dress's armholes, cut 4 cm too
-    shallow, ended 2.4–5.5× under an arm); so do held waistbands (2.3–5×), which settling relaxes."""
-    stretch = face_stretch(model, x)
-    if not len(stretch):
-        return 1.0, None
-    k = int(np.argmax(stretch))
-    return float(stretch[k]), np.asarray(x)[np.asarray(model.faces)[k]].mean(axis=0).round(4).tolist()
+                              {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds, "max_triangle_stretch": worst,
+                               "most_stretched_at_m": None if at is None else at.round(4).tolist()})
 
 
 def _sew_step(d: Dressing, garment: int) -> float | None:
