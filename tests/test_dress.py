@@ -12,10 +12,11 @@ from tailor import read_body, read_pattern
 from tailor.body import Body
 from tailor.cli import main
 from tailor.dress import DrapeOptions, drape, prepare
-from tailor.dress.options import REST_FRAMES, REST_SPEED, TRANSITION_SPEED
+from tailor.dress.options import REST_FRAMES, REST_SPEED, TRANSITION_SPEED, settle_step
 from tailor.dress.phases import animate, rms_speed, settle, sew, transition
 from tailor.errors import SimulationError
 from tailor.integrators import INTEGRATORS
+from tailor.outfit import outfit
 from tailor.tearing import Cut
 
 PANELS = Path(__file__).resolve().parents[1] / "panels"
@@ -105,6 +106,18 @@ def test_every_preset_settles_to_the_same_rest_and_final_gets_there_still(manneq
         assert report.frames < d.options.fps and rms_speed(d.garment.model, state) < REST_SPEED
         ends.append(state.x)
     assert np.linalg.norm(ends[0] - ends[1], axis=1).max() < 1e-3
+
+
+def test_a_single_garment_settles_at_a_coarser_step_than_an_outfit(mannequin):
+    """Settling's step (quasi-static): 40 ms for a 2 cm garment, draft's 20 ms for an outfit (whose
+    layers have blown up walking after a coarse settling); never below the preset's own step."""
+    tshirt, skirt = read_pattern(PANELS / "tshirt.json"), read_pattern(PANELS / "skirt.json")
+    steps = {}
+    for name, pattern in (("one", tshirt), ("outfit", outfit([skirt, tshirt]))):
+        d, _, _ = prepare(pattern, mannequin, DrapeOptions(resolution=0.02, quality="final"))
+        steps[name] = d.timeline.settle_step
+    assert steps == {"one": pytest.approx(0.04), "outfit": pytest.approx(0.02)}
+    assert settle_step(0.01, False) == pytest.approx(0.02) and settle_step(0.08, False) == pytest.approx(0.04)
 
 
 def test_transition_and_motion_alone_on_a_still_body(skirt_dressing, settled):

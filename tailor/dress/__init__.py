@@ -29,7 +29,7 @@ from ..sim import max_stretch, quality as sim_quality
 from ..sizing import check_loops
 from ..topology import boundary_edges
 from .garment import Garment, layer_spacing
-from .options import DRAPE_RESOLUTION, SETTLE_QUALITY, DrapeOptions
+from .options import DRAPE_RESOLUTION, DrapeOptions, settle_step
 from .phases import Dressing, animate, settle, sew, transition
 from .report import DrapeProgress, DrapeReport, DrapeResult, PhaseReport
 from .timeline import Timeline
@@ -117,7 +117,7 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     still = settle = None  # explicit integrators keep Eq. 24's step
     if not integ.explicit:
         still = q.garment_step(opts.resolution)
-        settle = max(still, SETTLE_QUALITY.garment_step(opts.resolution))  # quasi-static: the coarse step
+        settle = max(still, settle_step(opts.resolution, bool(pattern.pieces)))  # quasi-static: a coarse step
     timeline = Timeline(body, still, settle_step=settle)
     landmarks = measure_body(body, timeline.pose)
     pattern = ease_layers(pattern, landmarks, layer_spacing(fabrics))  # an outfit's outer loops round the inner ones

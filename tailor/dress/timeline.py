@@ -62,18 +62,22 @@ class NearBodySpeed:
             return 0.0
         cloth = float(np.sqrt((v * v).sum(axis=1).max())) if len(v) else 0.0
         reach = self.margin + (float(speed.max()) + 2.0 * cloth + 1.0) * duration + self.edge
-        d, nearest = cKDTree(x).query(body_x, distance_upper_bound=reach)
-        near = np.flatnonzero(np.isfinite(d))
+        # only the body vertices within the cloth's box grown by the reach can be within reach of it
+        box = np.flatnonzero(((body_x >= x.min(axis=0) - reach) & (body_x <= x.max(axis=0) + reach)).all(axis=1))
+        d, nearest = cKDTree(x).query(body_x[box], distance_upper_bound=reach)
+        hit = np.isfinite(d)
+        near, nearest = box[hit], nearest[hit]
         if not len(near):
             return 0.0
         if intervals is None:
             return float(speed[near].max())
-        return max(float(np.linalg.norm(self._velocity(k)[near] - v[nearest[near]], axis=1).max()) for k in intervals)
+        return max(float(np.linalg.norm(self._velocity(k, near) - v[nearest], axis=1).max()) for k in intervals)
 
-    def _velocity(self, k: int) -> np.ndarray:
-        """(N, 3) body velocity [m/s] over the motion's interval ``k`` (the last one loops to frame 0)."""
+    def _velocity(self, k: int, ids) -> np.ndarray:
+        """(len(ids), 3) velocity [m/s] of body vertices ``ids`` over the motion's interval ``k`` (the
+        last one loops to frame 0)."""
         f = self.frames
-        return (f[(k + 1) % len(f)] - f[k]) * self.fps
+        return (f[(k + 1) % len(f), ids] - f[k, ids]) * self.fps
 
 
 class Timeline:
