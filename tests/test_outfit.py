@@ -288,6 +288,20 @@ def test_a_skirt_over_trousers_keeps_its_layer(resolution, frames):
     assert np.count_nonzero(garment == 1) > 500
 
 
+def test_each_stage_of_an_outfit_sews_at_the_step_its_own_garment_allows():
+    """A stage holding its garment's heights (the trousers' band) sews at the plain step; the T-shirt
+    over them, holding none of its own, at the longer free step, as it does alone."""
+    from tailor.dress.options import FREE_SEW_STEP
+    from tailor.dress.phases import _sew_step
+
+    d, _, x0 = prepare(outfit(_patterns("trousers", "tshirt")), read_body("mannequin"), DrapeOptions(resolution=0.08))
+    g = d.garment
+    under, ceilings = g.attached_ceilings(x0)
+    d.held_heights = (g.attached, x0[g.attached, 2], under, ceilings)
+    assert len(g.attached) and np.isin(g.attached, g.garment_vertices(0)).all()
+    assert _sew_step(d, 0) is None and _sew_step(d, 1) == FREE_SEW_STEP
+
+
 def test_an_outer_garment_held_where_an_inner_one_is_held_is_raised_and_held_a_layer_out():
     """The skirt and the trousers are both held at the waist: the skirt is placed ATTACH_RISE higher
     (its band's top edge over the trousers' band, not edge to edge with it) and its held vertices are

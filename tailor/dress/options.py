@@ -178,9 +178,10 @@ SEWING = PhaseSettings(
     # a corner pulled three ways may stretch its triangles this far before merging
     max_stretch=10.0, moving=False)
 FREE_SEW_STEP = 0.02
-"""[s] The step a garment's sewing takes when it holds none of its heights (a T-shirt, a dress; not
-yet an outfit's stages): its seams close in about as much simulated time as at the plain 10 ms
-step, in half the steps (the pull's damping taken for the step, :attr:`~tailor.seams.Sewing.step`).
+"""[s] The step a garment's sewing takes when it holds none of its heights (a T-shirt, a dress, and
+so an outfit's stage sewing one over held trousers): its seams close in about as much simulated
+time as at the plain 10 ms step, in half the steps (the pull's damping taken for the step,
+:attr:`~tailor.seams.Sewing.step`).
 A stage holding a band's heights keeps the plain step: the heights are put back after each step,
 and within a longer one the seams drag the band's lower rows further (docs/measurements.md,
 twenty-fourth day)."""

@@ -228,9 +228,9 @@ def sew(d: Dressing, x0):
 def _sew_step(d: Dressing, garment: int) -> float | None:
     """The step [s] a stage sewing ``garment`` takes: :data:`~.options.FREE_SEW_STEP` when it holds
     none of that garment's heights (an implicit drape only), else the plain one (None). An outfit's
-    stages keep the plain step for now: a T-shirt over a dress at 2 cm, fragile at the armpit,
-    blew up in its walk after its T-shirt sewed at the longer one (docs/measurements.md, twenty-fifth day)."""
-    if d.timeline.still_step is None or d.garment.pattern.pieces:
+    stage is judged by its own garment: a T-shirt over held trousers sews at the longer step, the
+    trousers below it at the plain one."""
+    if d.timeline.still_step is None:
         return None
     held = d.held_heights[0] if d.held_heights is not None else np.zeros(0, np.intp)
     return None if np.isin(held, d.garment.garment_vertices(garment)).any() else FREE_SEW_STEP
