@@ -12,11 +12,10 @@ from tailor import read_body, read_pattern
 from tailor.body import Body
 from tailor.cli import main
 from tailor.dress import DrapeOptions, drape, prepare
-from tailor.dress.options import REST_FRAMES, REST_SPEED, TRANSITION_SPEED, settle_step
+from tailor.dress.options import REST_FRAMES, REST_SPEED, SETTLE_RAMP, TRANSITION_SPEED, settle_step
 from tailor.dress.phases import animate, rms_speed, settle, sew, transition
 from tailor.errors import SimulationError
 from tailor.integrators import INTEGRATORS
-from tailor.outfit import outfit
 from tailor.tearing import Cut
 
 PANELS = Path(__file__).resolve().parents[1] / "panels"
@@ -108,16 +107,17 @@ def test_every_preset_settles_to_the_same_rest_and_final_gets_there_still(manneq
     assert np.linalg.norm(ends[0] - ends[1], axis=1).max() < 1e-3
 
 
-def test_a_single_garment_settles_at_a_coarser_step_than_an_outfit(mannequin):
-    """Settling's step (quasi-static): 40 ms for a 2 cm garment, draft's 20 ms for an outfit (whose
-    layers have blown up walking after a coarse settling); never below the preset's own step."""
-    tshirt, skirt = read_pattern(PANELS / "tshirt.json"), read_pattern(PANELS / "skirt.json")
-    steps = {}
-    for name, pattern in (("one", tshirt), ("outfit", outfit([skirt, tshirt]))):
-        d, _, _ = prepare(pattern, mannequin, DrapeOptions(resolution=0.02, quality="final"))
-        steps[name] = d.timeline.settle_step
-    assert steps == {"one": pytest.approx(0.04), "outfit": pytest.approx(0.02)}
-    assert settle_step(0.01, False) == pytest.approx(0.02) and settle_step(0.08, False) == pytest.approx(0.04)
+def test_settling_steps_at_the_garment_step_first_then_coarser(mannequin):
+    """Settling's step (quasi-static, alike in every preset): draft's garment step for its first
+    SETTLE_RAMP s (gravity comes on: the fastest fall), then 2 s/m of mesh (40 ms at 2 cm)."""
+    d, _, _ = prepare(read_pattern(PANELS / "tshirt.json"), mannequin, DrapeOptions(resolution=0.02, quality="final"))
+    tl = d.timeline
+    assert tl.still_step == pytest.approx(0.005)
+    tl.start_settling(1.0)
+    assert tl.settling_step(1.0) == pytest.approx(0.02)
+    assert tl.settling_step(1.0 + SETTLE_RAMP - 0.04) == pytest.approx(0.02)
+    assert tl.settling_step(1.0 + SETTLE_RAMP) == pytest.approx(0.04)
+    assert settle_step(0.01) == pytest.approx(0.02) and settle_step(0.08) == pytest.approx(0.04)
 
 
 def test_transition_and_motion_alone_on_a_still_body(skirt_dressing, settled):

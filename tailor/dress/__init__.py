@@ -29,7 +29,7 @@ from ..sim import max_stretch, quality as sim_quality
 from ..sizing import check_loops
 from ..topology import boundary_edges
 from .garment import Garment, layer_spacing
-from .options import DRAPE_RESOLUTION, DrapeOptions, settle_step
+from .options import DRAPE_RESOLUTION, SETTLE_QUALITY, DrapeOptions, settle_step
 from .phases import Dressing, animate, settle, sew, transition
 from .report import DrapeProgress, DrapeReport, DrapeResult, PhaseReport
 from .timeline import Timeline
@@ -114,11 +114,12 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     q = sim_quality(opts.quality)
     # implicit steps shrink with the mesh: body contact is resolved once a step, so a vertex must
     # not move far compared with its triangles (docs/measurements.md)
-    still = settle = None  # explicit integrators keep Eq. 24's step
-    if not integ.explicit:
+    still = settle = ramp = None  # explicit integrators keep Eq. 24's step
+    if not integ.explicit:  # settling is quasi-static: every preset settles alike, at coarse steps after a ramp
         still = q.garment_step(opts.resolution)
-        settle = max(still, settle_step(opts.resolution, bool(pattern.pieces)))  # quasi-static: a coarse step
-    timeline = Timeline(body, still, settle_step=settle)
+        settle = max(still, settle_step(opts.resolution))
+        ramp = max(still, SETTLE_QUALITY.garment_step(opts.resolution))
+    timeline = Timeline(body, still, settle_step=settle, ramp_step=ramp)
     landmarks = measure_body(body, timeline.pose)
     pattern = ease_layers(pattern, landmarks, layer_spacing(fabrics))  # an outfit's outer loops round the inner ones
     mesh = discretise(pattern, opts.resolution)

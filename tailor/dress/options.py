@@ -18,7 +18,7 @@ from ..integrators import INTEGRATORS
 from ..sim import DEFAULT_QUALITY, QUALITY
 from ..tearing import Cut
 
-__all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLE_STEP_PER_RESOLUTION", "settle_step", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION", "FREE_SEW_STEP",
+__all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLE_STEP_PER_RESOLUTION", "SETTLE_RAMP", "settle_step", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION", "FREE_SEW_STEP",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
            "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "FREEZE_STRETCH", "FREEZE_RINGS", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
            "TUCK_BELOW", "TUCK_GATHER_TIME", "TUCK_ROW"]
@@ -186,20 +186,21 @@ A stage holding a band's heights keeps the plain step: the heights are put back 
 and within a longer one the seams drag the band's lower rows further (docs/measurements.md,
 twenty-fourth day)."""
 SETTLE_QUALITY = QUALITY["draft"]
-"""The preset whose tolerance every preset settles at (``PhaseSettings.quasi_static``), and whose
-step an outfit settles at."""
+"""The preset whose tolerance every preset settles at (``PhaseSettings.quasi_static``)."""
 SETTLE_STEP_PER_RESOLUTION = 2.0
-"""[s/m] A single garment settles at this step per metre of mesh, at most :data:`SETTLE_QUALITY`'s
-step (40 ms at 2 cm, twice draft's garment step): settling is quasi-static, and its end state is as
-far from ``final``'s as at draft's step on the shipped garments, in half the steps. An outfit keeps
-draft's garment step: a T-shirt tucked into trousers settled at 40 ms has blown up walking
-(docs/measurements.md, twenty-third and twenty-eighth days)."""
+"""[s/m] Settling steps at this per metre of mesh, at most :data:`SETTLE_QUALITY`'s step (40 ms at
+2 cm, twice draft's garment step), after :data:`SETTLE_RAMP`: settling is quasi-static, and its end
+state is as far from ``final``'s as at draft's step on the shipped garments, in half the steps."""
+SETTLE_RAMP = 0.2
+"""[s] The first part of settling, stepped at :data:`SETTLE_QUALITY`'s garment step (20 ms at 2 cm;
+the preset's own where that is longer): gravity comes on and the
+sewn garment's first fall is settling's fastest motion. Outfits settled at 40 ms from the start
+blew up there (a T-shirt tucked into trousers, a T-shirt over a dress at 2.1 cm: a triangle at the
+waist or the armpit 16× in the first steps; docs/measurements.md, twenty-eighth day)."""
 
 
-def settle_step(resolution: float, outfit: bool) -> float:
-    """The step [s] a garment (``outfit``: several) meshed at ``resolution`` [m] settles at."""
-    if outfit:
-        return SETTLE_QUALITY.garment_step(resolution)
+def settle_step(resolution: float) -> float:
+    """The step [s] a garment meshed at ``resolution`` [m] settles at after :data:`SETTLE_RAMP`."""
     return min(SETTLE_QUALITY.step, SETTLE_STEP_PER_RESOLUTION * resolution)
 SETTLING = PhaseSettings("settling", gravity=True, contact=ContactSettings(), tolerance=SETTLE_QUALITY.tolerance,
                          max_stretch_change=0.3, wind=True, max_stretch=SEWING.max_stretch, moving=False, quasi_static=True)

@@ -105,7 +105,7 @@ class Dressing:
         else:
             dt = self.garment.sewing.step  # sewing: the plain implicit step, or a stage's longer one
             if self.phase.gravity:
-                dt = self.timeline.settle_step if self.phase.quasi_static else self.timeline.still_step
+                dt = self.timeline.settling_step(state.t) if self.phase.quasi_static else self.timeline.still_step
         state = self.stepper.advance(self.garment.model, state, duration, dt)
         if rescue:
             self.contacts.rescue(self.garment.model, state)
@@ -302,9 +302,11 @@ def _open_seams(garment, state, timeout: float) -> str:
 
 def settle(d: Dressing, state):
     """Phase 2: gravity on, the attachments pinned, the garment comes to rest: for ``settle`` s at
-    most, ending early once it is still (:data:`~.options.REST_SPEED`)."""
+    most, ending early once it is still (:data:`~.options.REST_SPEED`); stepped coarsely after its
+    first :data:`~.options.SETTLE_RAMP` s (:meth:`~.timeline.Timeline.settling_step`)."""
     t0 = time.perf_counter()
     state, d.attachments = d.garment.attach(state, d.contacts.body, d.timeline.pose)
+    d.timeline.start_settling(state.t)
     d.held_heights = d.gathering = None
     d.contacts.follow(d.garment.friction, state.x)
     d.enter(SETTLING)  # and the constraints of the new numbering (Dressing.enter)

@@ -17,7 +17,7 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .options import TRANSITION_KEYS_PER_S, transition_seconds
+from .options import SETTLE_RAMP, TRANSITION_KEYS_PER_S, transition_seconds
 
 __all__ = ["Timeline", "NearBodySpeed"]
 
@@ -89,11 +89,14 @@ class Timeline:
     still_step : float or None
         The implicit step [s] while the body is still (None: explicit integrators keep Eq. 24's).
     settle_step : float or None
-        The implicit step [s] of a quasi-static phase (settling: only its end state matters);
-        default ``still_step``.
+        The implicit step [s] of a quasi-static phase (settling: only its end state matters) once
+        its first :data:`~.options.SETTLE_RAMP` s are over; default ``still_step``.
+    ramp_step : float or None
+        The step [s] of those first seconds; default ``still_step``.
     """
 
-    def __init__(self, body, still_step: float | None, *, settle_step: float | None = None):
+    def __init__(self, body, still_step: float | None, *, settle_step: float | None = None,
+                 ramp_step: float | None = None):
         self.body = body
         self.moving = body.frame_count > 1
         has_rest = self.moving and body.rest is not None
@@ -101,10 +104,12 @@ class Timeline:
         # seconds from the rest pose into the motion's first frame (0: no transition)
         self.transition_s = transition_seconds(float(np.linalg.norm(body.frames[0] - self.pose, axis=1).max())) if has_rest else 0.0
         self.keys = max(1, int(round(TRANSITION_KEYS_PER_S * self.transition_s))) if has_rest else 0
+        self.settle_start = None  # [s] of the drape's clock, set when gravity comes on
         self.transition_start = None  # [s] of the drape's clock, set when the body starts to move
         self.motion_start = None
         self.still_step = still_step
         self.settle_step = still_step if settle_step is None else settle_step
+        self.ramp_step = still_step if ramp_step is None else ramp_step
         self.steps_used: list = []
         self._near = None
         self.margin = 0.0
@@ -119,6 +124,17 @@ class Timeline:
         steps = np.arange(1, self.keys + 1)[:, None, None] / self.keys
         pose = self.pose
         return np.concatenate([pose[None], pose + steps * (self.body.frames[0] - pose), self.body.frames])
+
+    def start_settling(self, t: float) -> None:
+        """Settling (gravity on) starts at ``t`` [s]: :meth:`settling_step` ramps from there."""
+        self.settle_start = t
+
+    def settling_step(self, t: float) -> float | None:
+        """The quasi-static step [s] at time ``t`` of settling: ``ramp_step`` for its first
+        :data:`~.options.SETTLE_RAMP` s, ``settle_step`` after."""
+        if self.settle_start is None or t - self.settle_start < SETTLE_RAMP - 1e-9:
+            return self.ramp_step
+        return self.settle_step
 
     def start_transition(self, t: float) -> None:
         """The body starts to move (into its motion's first frame, if it has a rest pose) at ``t`` [s]."""
