@@ -51,6 +51,8 @@ class Sewing:
         Where the pairs whose midpoint lies inside the body meet instead (:meth:`route_around`).
     stuck : (S,) bool
         Pairs that once closed by less than :data:`STALL` of their gap from one :meth:`close` to the next.
+    stalled : (S,) bool
+        The open pairs that closed by less than that at the last :meth:`close`.
     anchored : (A,) int
         Mesh vertices of the panels held while sewing (:meth:`anchor`); none at first.
     blocked : (S,) bool
@@ -83,6 +85,7 @@ class Sewing:
         if self.seam is not None:
             self.seam = np.asarray(self.seam, np.intp)[keep]
         self.stuck = np.zeros(len(self.pairs), bool)
+        self.stalled = np.zeros(len(self.pairs), bool)
         self.anchored = np.zeros(0, np.intp)
         self.blocked = np.zeros(len(self.pairs), bool)
         self.routes_stuck = False
@@ -234,7 +237,9 @@ class Sewing:
             return 0
         gap = self.gaps(x)[open_]
         # a pair that closed less than STALL of its gap since the last call is stuck (for good)
-        self.stuck[open_] |= gap > (1.0 - STALL) * self._last_gap[open_]
+        self.stalled[:] = False
+        self.stalled[open_] = gap > (1.0 - STALL) * self._last_gap[open_]
+        self.stuck |= self.stalled
         self._last_gap[open_] = gap
         close = gap < self.merge_distance
         if close.any():

@@ -166,3 +166,24 @@ def test_pairs_whose_midpoint_is_inside_the_body_meet_over_it():
     sewing.route_around(None)
     f = pull()
     assert np.allclose(f[0], -f[1]) and f[0, 1] > 0 and not f[0, [0, 2]].any()  # straight through
+
+
+def test_the_last_pairs_are_stitched_where_they_are_once_every_one_stops_closing():
+    """Eq. 16's d widens to the stragglers' reach as soon as the few pairs left all stopped closing
+    (caught round an arm), not only after ¾ of the sewing time-out; pairs still closing wait."""
+    from tailor.dress.options import DrapeOptions, STRAGGLER_REACH
+    from tailor.dress.phases import _widen_merging
+
+    opts = DrapeOptions(resolution=0.02)
+    x = np.array([[0.0, 0, 0], [0.03, 0, 0], [1.0, 0, 0], [1.02, 0, 0]])
+    for closing in (True, False):
+        s = Sewing(np.array([[0, 1], [2, 3]]), merge_distance=0.004)
+        s.merged[1] = True
+        s.close(x)
+        y = x.copy()
+        y[1, 0] = 0.02 if closing else 0.0299  # 3 → 2 cm, or stalled at 3 cm
+        s.close(y)
+        assert bool(s.stalled[0]) is not closing and not s.stalled[1]  # a merged pair never stalls
+        _widen_merging(s, 0.5, opts)
+        assert s.merge_distance == (0.004 if closing else pytest.approx(STRAGGLER_REACH * 0.02))
+        assert s.close(y) == (0 if closing else 1)
