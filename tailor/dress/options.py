@@ -202,6 +202,8 @@ waist or the armpit 16× in the first steps; docs/measurements.md, twenty-eighth
 def settle_step(resolution: float) -> float:
     """The step [s] a garment meshed at ``resolution`` [m] settles at after :data:`SETTLE_RAMP`."""
     return min(SETTLE_QUALITY.step, SETTLE_STEP_PER_RESOLUTION * resolution)
+
+
 SETTLING = PhaseSettings("settling", gravity=True, contact=ContactSettings(), tolerance=SETTLE_QUALITY.tolerance,
                          max_stretch_change=0.3, wind=True, max_stretch=SEWING.max_stretch, moving=False, quasi_static=True)
 TRANSITION = PhaseSettings("transition", gravity=True, contact=ContactSettings(), tolerance=None, max_stretch_change=0.3,
