@@ -104,6 +104,12 @@ class Sewing:
         """Pairs sewing now and not yet merged."""
         return int((~self.merged & self.active).sum())
 
+    @property
+    def all_stalled(self) -> bool:
+        """Whether there are pairs sewing now and every one of them stalled at the last :meth:`close`."""
+        now = ~self.merged & self.active
+        return bool(now.any() and self.stalled[now].all())
+
     def sew_only(self, active) -> None:
         """From now on only the pairs where ``active`` (S,) is true pull and merge."""
         self.active = np.asarray(active, bool).copy()

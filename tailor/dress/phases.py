@@ -157,9 +157,7 @@ def _widen_merging(sewing, t: float, options: DrapeOptions) -> None:
     if t >= 0.5 * options.sew_timeout:
         sewing.merge_distance = max(sewing.merge_distance, 0.6 * options.resolution)
     stragglers = max(MIN_STRAGGLERS, STRAGGLERS * int(sewing.active.sum()))
-    now = ~sewing.merged & sewing.active
-    caught = now.any() and bool(sewing.stalled[now].all())
-    if (t >= 0.75 * options.sew_timeout or caught) and sewing.sewing_count <= stragglers:
+    if (t >= 0.75 * options.sew_timeout or sewing.all_stalled) and sewing.sewing_count <= stragglers:
         sewing.merge_distance = max(sewing.merge_distance, STRAGGLER_REACH * options.resolution)
 
 
