@@ -65,9 +65,10 @@ garment tests' setting. Speeds against Blender's cloth: docs/measurements.md and
 
 
 DEFAULT_QUALITY = "draft"
-"""The preset garments drape at unless asked otherwise: the knee of the garment frontier, the
-cheapest preset within a few millimetres of ``final`` on the T-shirt, skirt, trousers and dress
-walking at 2 cm (``benchmarks/garment_presets.py``; the README's "Speed versus accuracy")."""
+"""The preset garments drape at unless asked otherwise: the knee of the garment frontier, measured on
+the T-shirt, skirt, trousers and dress walking at 2 cm against how far ``final`` lands from itself
+(``benchmarks/garment_presets.py --floor``; the README's "Speed versus accuracy": within a few mm of
+that on the T-shirt and the skirt, about 9 mm beyond it on the trousers and the dress)."""
 
 
 def quality(name: str) -> Quality:
