@@ -238,7 +238,7 @@ def run_job(job: Job, out) -> dict:
     """Run one job and write ``out/<job.id>/``; never raises: returns its manifest row."""
     from .dress import drape
     from .io import read_pattern
-    from .io.garment import write_drape
+    from .io.garment import DrapeWriter
     from .outfit import outfit
 
     t0, cpu0 = time.perf_counter(), time.process_time()
@@ -251,12 +251,15 @@ def run_job(job: Job, out) -> dict:
 
     try:
         pattern = outfit([read_pattern(p) for p in job.patterns], tuck=job.option("tuck"))
-        result = drape(pattern, _body(job.body), job.fabric or None, frames=job.option("frames"), fps=job.option("fps"),
-                       resolution=job.option("resolution") * 1e-2, integrator=job.option("integrator"),
-                       quality=job.option("quality"), self_collision=job.option("self_collision"),
-                       sew_timeout=job.option("sew_timeout"), progress=progress)
-        write_drape(result, Path(out) / job.id, overwrite=True, with_body=job.option("with_body"))
-        row.update(status="done", **_measures(result.report.to_json(), len(result.frames)))
+        body = _body(job.body)
+        with DrapeWriter(Path(out) / job.id, pattern, overwrite=True,
+                         body_faces=body.faces if job.option("with_body") else None) as writer:  # frames stream to disk
+            result = drape(pattern, body, job.fabric or None, frames=job.option("frames"), fps=job.option("fps"),
+                           resolution=job.option("resolution") * 1e-2, integrator=job.option("integrator"),
+                           quality=job.option("quality"), self_collision=job.option("self_collision"),
+                           sew_timeout=job.option("sew_timeout"), progress=progress, sink=writer, keep_frames=False)
+            writer.finish(result.report)
+        row.update(status="done", **_measures(result.report.to_json(), writer.count))
     except TailorError as exc:
         row["reason"] = str(exc).splitlines()[0]
     except Exception as exc:  # a bug in one job must not stop the batch; the row keeps what it was

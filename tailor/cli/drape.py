@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import TailorError
@@ -32,7 +33,7 @@ def _cmd_drape(args) -> int:
     from ..dress import drape
     from ..io import read_pattern
     from ..io.body_files import read_body
-    from ..io.garment import write_drape
+    from ..io.garment import DrapeWriter
 
     formats = _formats(args.format)  # checked before a long run, not after
     options = _options(args)
@@ -50,20 +51,19 @@ def _cmd_drape(args) -> int:
     if args.tuck and len(patterns) < 2:
         raise TailorError("--tuck tucks a top into a bottom's waistband: give both patterns")
     pattern = outfit(patterns, tuck=args.tuck)
-    bars = PhaseBars(disable=args.quiet)
+    # the OBJ frames stream to disk as they come; only fit maps, other formats and previews need them all
+    keep = bool(args.fit or args.preview or any(f != "obj" for f in formats))
     t0 = time.perf_counter()
-    try:
-        result = drape(pattern, body, options=options, progress=bars)
-    finally:
-        bars.close()
-    fits = None
-    if args.fit:
-        from ..fit import FitSource, fit_section
+    with DrapeWriter(out, pattern, overwrite=args.overwrite, body_faces=body.faces if args.with_body else None) as writer:
+        result = _run(drape, pattern, body, replace(options, keep_frames=keep), writer, args.quiet)
+        fits = None
+        if args.fit:
+            from ..fit import FitSource, fit_section
 
-        source = FitSource.of_drape(result)
-        fits = make_fits(source, fit_frames(args.fit, len(result.frames)), quiet=args.quiet)
-        result.report.fit = fit_section(fits)
-    write_drape(result, out, overwrite=args.overwrite, with_body=args.with_body)
+            source = FitSource.of_drape(result)
+            fits = make_fits(source, fit_frames(args.fit, len(result.frames)), quiet=args.quiet)
+            result.report.fit = fit_section(fits)
+        writer.finish(result.report)
     if fits:
         from ..io.fit_files import write_fit
 
@@ -80,7 +80,7 @@ def _cmd_drape(args) -> int:
             _preview(anim, out / "preview", args)
     r = result.report
     print(f"{pattern.source} on {args.body}: {r.vertices} vertices ({r.welded_vertices} after sewing), "
-          f"{len(result.frames)} frames, max penetration {r.max_penetration_m * 1000:.1f} mm, "
+          f"{writer.count} frames, max penetration {r.max_penetration_m * 1000:.1f} mm, "
           f"seam gap at merge {r.phases['sewing'].extra['max_gap_at_merge_m'] * 1000:.1f} mm, "
           f"crossings {max(r.crossings_per_frame, default=0)}, "
           + (f"{len(options.cuts)} cuts and {r.tearing['edges_torn']} edges torn, " if r.tearing is not None else "")
@@ -94,6 +94,15 @@ def _cmd_drape(args) -> int:
         print(f"tailor: warning: garments out of their layer order: up to {max(r.out_of_layer_per_frame)} vertices "
               f"inside a garment they should be over (report.json out_of_layer_per_frame)", file=sys.stderr)
     return 0
+
+
+def _run(drape, pattern, body, options, writer, quiet: bool):
+    """The drape, its frames handed to ``writer`` as they come, with progress bars on stderr."""
+    bars = PhaseBars(disable=quiet)
+    try:
+        return drape(pattern, body, options=options, progress=bars, sink=writer)
+    finally:
+        bars.close()
 
 
 def crossing_warning(crossings, self_collision: str) -> str | None:

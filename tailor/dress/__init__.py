@@ -4,7 +4,8 @@
 phase's settings), :mod:`.timeline` (the body over time), :mod:`.garment` (the one owner of the
 vertex numbering), the :class:`~tailor.contact.ContactPipeline` (walls, attachments, body,
 self-contact, rescue), :mod:`.phases` (sew, settle, transition, animate) and :mod:`.report`.
-Nothing here writes files: frames go to the caller (``on_frame``) and into the result.
+Nothing here writes files: frames go to the caller (``on_frame``, ``sink``) and, unless ``keep_frames`` is
+off, into the result.
 """
 
 from __future__ import annotations
@@ -22,24 +23,23 @@ from ..errors import SimulationError
 from ..integrators import make_integrator
 from ..measure import measure_body
 from ..mesh import discretise
-from ..outfit import ease_layers, garment_of_vertex, out_of_order, outfit
+from ..outfit import ease_layers, garment_of_vertex, outfit
 from ..limbwalls import limb_walls
 from ..placement import place_panels
 from ..sim import max_stretch, quality as sim_quality
 from ..sizing import check_loops
-from ..topology import boundary_edges
 from .garment import Garment, layer_spacing
 from .options import DRAPE_RESOLUTION, SETTLE_QUALITY, DrapeOptions, settle_step
 from .phases import Dressing, animate, settle, sew, transition
-from .report import DrapeProgress, DrapeReport, DrapeResult, PhaseReport
+from .report import DrapeFrame, DrapeProgress, DrapeReport, DrapeResult, PhaseReport
 from .timeline import Timeline
 
 log = logging.getLogger(__name__)
 
-__all__ = ["drape", "prepare", "DrapeResult", "DrapeReport", "DrapeProgress", "DrapeOptions", "PhaseReport", "DRAPE_RESOLUTION"]
+__all__ = ["drape", "prepare", "DrapeResult", "DrapeReport", "DrapeProgress", "DrapeFrame", "DrapeOptions", "PhaseReport", "DRAPE_RESOLUTION"]
 
 
-def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: DrapeOptions | None = None,
+def drape(pattern, body, fabric=None, *, on_frame=None, sink=None, progress=None, options: DrapeOptions | None = None,
           tuck: bool = False, **kwargs) -> DrapeResult:
     """Dress ``body`` in ``pattern`` and animate it.
 
@@ -53,6 +53,10 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
     fabric : Fabric or str, optional
         Overrides the pattern's fabric (panels with their own keep theirs).
     on_frame : callable ``on_frame(index, garment_x, body_x)``, optional
+    sink : callable ``sink(DrapeFrame)``, optional
+        Each frame with its loads and mesh as it leaves the simulation (:class:`DrapeFrame`): a
+        writer streaming the frames to disk (:class:`tailor.io.garment.DrapeWriter`), with
+        ``keep_frames=False`` so the result holds none of them.
     progress : callable ``progress(DrapeProgress)``, optional
         Called after every frame of every phase.
     options : DrapeOptions, optional
@@ -66,13 +70,15 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
         - ``self_collision`` ("auto"): cloth–cloth contact from the moment the garment is sewn;
           ``auto`` checks only the regions that can touch themselves, ``on``, ``off``;
         - ``quality`` (:data:`tailor.sim.DEFAULT_QUALITY`): implicit step and solver tolerance (:data:`tailor.sim.QUALITY`);
-          ``normal`` is the knee of the garment frontier (README, "Speed versus accuracy");
+          ``draft`` is the knee of the garment frontier (README, "Speed versus accuracy");
         - ``wind``: a :class:`~tailor.forces.wind.Wind` or (3,) air velocity, blowing once sewn;
         - ``cuts``: :class:`~tailor.tearing.Cut` on the dressed garment, ``time`` from frame 0,
           points in the body's frame [m]; made after the first step ending at or after its time;
         - ``tear``: the garment tears where stretched across an edge beyond its fabric's
           ``tear_strain``. With cuts or tearing see :attr:`DrapeResult.topology`;
-        - ``limb_walls`` (True): each leg's panels keep to their side of the plane between the legs.
+        - ``limb_walls`` (True): each leg's panels keep to their side of the plane between the legs;
+        - ``keep_frames`` (True): keep every frame in the result (off: they only go to ``on_frame``
+          and ``sink``, and memory does not grow with the frame count).
 
     Raises
     ------
@@ -88,7 +94,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
     opts = options or DrapeOptions(fabric=fabric, **kwargs)
     if options is not None and (fabric is not None or kwargs):
         opts = replace(options, **kwargs, **({"fabric": fabric} if fabric is not None else {}))
-    d, loops, x0 = prepare(pattern, body, opts, on_frame, progress)
+    d, loops, x0 = prepare(pattern, body, opts, on_frame, progress, sink)
     pattern = d.garment.pattern  # an outfit's, eased (tailor.outfit.ease_layers)
     report = _header(d, pattern, body, loops, opts)
     report.placement_crossings = _placement_crossings(x0, d.garment.mesh, pattern)
@@ -105,7 +111,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, progress=None, options: 
                        contact_forces=[c for c, _ in d.loads], attachment_forces=[a for _, a in d.loads])
 
 
-def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
+def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None, sink=None):
     """The garment placed round the body, the timeline, the contacts: a :class:`Dressing` ready to
     sew; also the pattern's loops checked against the body and the placed positions."""
     base = opts.fabric or pattern.fabric
@@ -137,7 +143,7 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None):
     panel_layer = garment_of_vertex(pattern, np.arange(len(pattern.panels))) if pattern.pieces else None
     contacts = ContactPipeline(collider, timeline, thickness=garment.thickness, friction=garment.friction,
                                self_collision=opts.self_collision, panel_layer=panel_layer)
-    d = Dressing(opts, garment, timeline, contacts, integ, q, walls=walls, placer=placer, on_frame=on_frame,
+    d = Dressing(opts, garment, timeline, contacts, integ, q, walls=walls, placer=placer, on_frame=on_frame, sink=sink,
                  progress=progress)
     return d, loops, x0
 
@@ -214,26 +220,10 @@ def _header(d: Dressing, pattern, body, loops, opts: DrapeOptions) -> DrapeRepor
         ) if cond])
 
 
-def _out_of_layer(d: Dressing, body) -> list | None:
-    """Per frame, an outfit's vertices found inside a garment they should be over (None: one garment,
-    or a mesh cut during the run)."""
-    pattern, mesh = d.garment.pattern, d.garment.mesh
-    if not pattern.pieces or d.topology:
-        return None
-    garment = garment_of_vertex(pattern, mesh.vertex_panel)
-    weld = d.garment.weld
-    loose = d.garment.untucked()
-    loose = None if loose is None else loose[weld]  # the frames' (mesh) numbering
-    edge = np.zeros(int(weld.max()) + 1, bool)
-    edge[boundary_edges(weld[mesh.faces]).ravel()] = True  # open edges once the seams are welded
-    return [int(out_of_order(x, garment, bx, body.faces, loose=loose, edge=edge[weld]).sum())
-            for x, bx in zip(d.frames, d.body_frames)]
-
-
 def _close(report: DrapeReport, d: Dressing, t_start: float, body) -> None:
     """The report's totals once the last frame is out."""
     counters = d.integrator.counters
-    report.out_of_layer_per_frame = _out_of_layer(d, body)
+    report.out_of_layer_per_frame = d.out_of_layer if d.garment.pattern.pieces and not d.topology else None
     pen = report.max_penetration_m_per_frame
     report.max_penetration_m = max(pen) if pen else 0.0
     report.wall_s = time.perf_counter() - t_start

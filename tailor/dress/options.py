@@ -234,6 +234,9 @@ class DrapeOptions:
     fabric: Fabric | None = None
     limb_walls: bool = True
     """Keep each leg's panels on their side of the plane between the legs (off: to see what that prevents)."""
+    keep_frames: bool = True
+    """Keep every frame in the result; off, frames only go to the caller (``on_frame``, ``sink``: a writer
+    streaming them to disk), so a long animation takes no more memory than a short one."""
 
     def __post_init__(self):
         if isinstance(self.fabric, str):

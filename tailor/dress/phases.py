@@ -24,12 +24,13 @@ import numpy as np
 from ..constraints import Gather, HeightHold, LimbWallContact
 from ..errors import SimulationError
 from ..integrators import SolverSettings
-from ..outfit import garment_of_vertex, tuck_targets
+from ..outfit import garment_of_vertex, out_of_order, tuck_targets
 from ..sim import Guard, Stepper, max_stretch, most_stretched
+from ..topology import boundary_edges
 from .options import (BLOCKED_OVER, FREE_SEW_STEP, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
                       ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
                       TUCK_ROW, WELD_BATCH, DrapeOptions, PhaseSettings)
-from .report import DrapeProgress, PhaseReport
+from .report import DrapeFrame, DrapeProgress, PhaseReport
 
 __all__ = ["Dressing", "sew", "settle", "transition", "animate", "rms_speed"]
 
@@ -44,7 +45,7 @@ class Dressing:
     """
 
     def __init__(self, options: DrapeOptions, garment, timeline, contacts, integrator, quality, *, walls=None,
-                 placer=None, on_frame=None, progress=None):
+                 placer=None, on_frame=None, sink=None, progress=None):
         self.options, self.garment, self.timeline, self.contacts = options, garment, timeline, contacts
         self.walls, self.attachments = walls, None
         self.placer = placer  # ``placer(x, garment)``: an outfit's garment dressed over the inner ones (dress.Placer)
@@ -52,12 +53,14 @@ class Dressing:
         self.gathering = None  # (mesh vertices, start, target, t0 [s]) of a tuck's gather while the band sews
         self.integrator, self.quality = integrator, quality
         self.stepper = Stepper(integrator, contacts=contacts)
-        self.on_frame, self.progress = on_frame, progress
+        self.on_frame, self.sink, self.progress = on_frame, sink, progress
         self.phase: PhaseSettings = SEWING
         self.motion_limit = MOTION_MAX_STRETCH
-        self.frames: list = []
+        self.emitted = 0  # frames out so far
+        self.frames: list = []  # kept only with options.keep_frames
         self.body_frames: list = []
         self.loads: list = []  # (body contact, attachment) forces per welded vertex [N] of each frame
+        self.out_of_layer: list = []  # an outfit's vertices inside a garment they should be over, per frame
         self.topology: list = []  # (first frame, mesh, weld) after each cut or tear
         self.first_topology = (garment.mesh, garment.weld)  # frame 0's
         self.constrain()
@@ -112,14 +115,22 @@ class Dressing:
         return state
 
     def emit(self, state, body_x) -> None:
-        """A frame out: to the caller's ``on_frame`` and into the result."""
-        x = self.garment.frame(state)
+        """A frame out: to the caller's ``on_frame`` and ``sink``, and into the result if it keeps frames;
+        an outfit's layer order counted on it."""
+        g = self.garment
+        x = g.frame(state)
+        contact, attached = (a.astype(np.float32) for a in self.contacts.loads.take(len(state.x)))
         if self.on_frame is not None:
-            self.on_frame(len(self.frames), x, body_x)
-        self.frames.append(x.copy())
-        self.body_frames.append(body_x.copy())
-        contact, attached = self.contacts.loads.take(len(state.x))
-        self.loads.append((contact.astype(np.float32), attached.astype(np.float32)))
+            self.on_frame(self.emitted, x, body_x)
+        if self.sink is not None:
+            self.sink(DrapeFrame(self.emitted, x, body_x, contact, attached, g.mesh, g.weld))
+        if self.options.keep_frames:
+            self.frames.append(x.copy())
+            self.body_frames.append(body_x.copy())
+            self.loads.append((contact, attached))
+        if g.pattern.pieces:
+            self.out_of_layer.append(_out_of_layer(g, x, body_x, self.timeline.body.faces))
+        self.emitted += 1
 
     def tell(self, done: int, total: int, state) -> None:
         if self.progress is not None:
@@ -145,8 +156,21 @@ class Dressing:
         self.contacts.forget()
         self.constrain()
         self.integrator.reset()
-        self.topology.append((len(self.frames), self.garment.mesh, self.garment.weld.copy()))
+        self.topology.append((self.emitted, self.garment.mesh, self.garment.weld.copy()))
         return state
+
+
+def _out_of_layer(g, x, body_x, body_faces) -> int:
+    """An outfit's vertices at ``x`` (mesh numbering) found inside a garment they should be over
+    (:func:`~tailor.outfit.out_of_order`): not the cloth of a tucked top outside its tuck, nor the
+    open edges once the seams are welded."""
+    mesh, weld = g.mesh, g.weld
+    loose = g.untucked()
+    loose = None if loose is None else loose[weld]  # the frames' (mesh) numbering
+    edge = np.zeros(int(weld.max()) + 1, bool)
+    edge[boundary_edges(weld[mesh.faces]).ravel()] = True
+    garment = garment_of_vertex(g.pattern, mesh.vertex_panel)
+    return int(out_of_order(x, garment, body_x, body_faces, loose=loose, edge=edge[weld]).sum())
 
 
 def _widen_merging(sewing, t: float, options: DrapeOptions) -> None:

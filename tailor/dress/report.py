@@ -7,7 +7,36 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-__all__ = ["DrapeResult", "DrapeReport", "DrapeProgress", "PhaseReport"]
+__all__ = ["DrapeResult", "DrapeReport", "DrapeProgress", "DrapeFrame", "PhaseReport"]
+
+
+@dataclass(frozen=True)
+class DrapeFrame:
+    """One frame as it leaves the simulation, for a ``sink`` of :func:`~tailor.dress.drape` (a writer
+    streaming frames to disk: :class:`tailor.io.garment.DrapeWriter`).
+
+    Attributes
+    ----------
+    index : int
+        0, 1, … in the order written (with ``record_sewing`` the sewing's frames come first).
+    x : (N, 3) float
+        Every mesh vertex [m] (seam copies included), in ``mesh``'s numbering.
+    body_x : (M, 3) float
+        The body at the same instant [m].
+    contact_force, attachment_force : (W, 3) float32
+        The body's contact and the attachments' force on each welded vertex [N], averaged over the frame.
+    mesh, weld
+        The garment's mesh and its weld (mesh vertex → welded vertex) at this frame: a cut or a tear
+        changes them.
+    """
+
+    index: int
+    x: np.ndarray
+    body_x: np.ndarray
+    contact_force: np.ndarray
+    attachment_force: np.ndarray
+    mesh: object
+    weld: np.ndarray
 
 
 @dataclass(frozen=True)
