@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .grid import MAX_CELLS
 
@@ -22,6 +22,9 @@ __all__ = ["BodyDrift", "DRIFT_CELL"]
 
 DRIFT_CELL = 0.06
 """Side [m] of the cubes :class:`BodyDrift` keeps displacement boxes in (the body query's cubes)."""
+
+DRIFT_SLABS = 8
+"""Slabs of cubes along x that :func:`_bin_drift` fills in parallel (each scans every triangle's span)."""
 
 
 class BodyDrift:
@@ -52,24 +55,33 @@ class BodyDrift:
         return _relative(points, moved, self.origin, self.cell, self.dims, self.lo, self.hi)
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _bin_drift(x, disp, faces, origin, cell, dims, reach):
     """Per cube the box (lo, hi) of the displacements ``disp`` of the triangles whose box at ``x``,
-    grown by ``reach``, meets it."""
+    grown by ``reach``, meets it. Each thread fills the cubes of its own slab along x, from every
+    triangle's span of cubes (min and max: the same boxes on any thread count)."""
     lo = np.full((dims[0] * dims[1] * dims[2], 3), np.inf)
     hi = np.full((dims[0] * dims[1] * dims[2], 3), -np.inf)
-    for t in range(faces.shape[0]):
+    span = np.empty((faces.shape[0], 6), np.int64)
+    for t in prange(faces.shape[0]):
         u, v, w = faces[t, 0], faces[t, 1], faces[t, 2]
-        i0, i1 = _cells(x[u, 0], x[v, 0], x[w, 0], origin[0], cell, dims[0], reach)
-        j0, j1 = _cells(x[u, 1], x[v, 1], x[w, 1], origin[1], cell, dims[1], reach)
-        k0, k1 = _cells(x[u, 2], x[v, 2], x[w, 2], origin[2], cell, dims[2], reach)
-        for i in range(i0, i1 + 1):
-            for j in range(j0, j1 + 1):
-                for k in range(k0, k1 + 1):
-                    c = (i * dims[1] + j) * dims[2] + k
-                    for a in range(3):
-                        lo[c, a] = min(lo[c, a], disp[u, a], disp[v, a], disp[w, a])
-                        hi[c, a] = max(hi[c, a], disp[u, a], disp[v, a], disp[w, a])
+        for a in range(3):
+            span[t, 2 * a], span[t, 2 * a + 1] = _cells(x[u, a], x[v, a], x[w, a], origin[a], cell, dims[a], reach)
+    slabs = min(dims[0], DRIFT_SLABS)
+    for s in prange(slabs):
+        first, end = s * dims[0] // slabs, (s + 1) * dims[0] // slabs
+        for t in range(faces.shape[0]):
+            i0, i1 = max(span[t, 0], first), min(span[t, 1], end - 1)
+            if i0 > i1:
+                continue
+            u, v, w = faces[t, 0], faces[t, 1], faces[t, 2]
+            for i in range(i0, i1 + 1):
+                for j in range(span[t, 2], span[t, 3] + 1):
+                    for k in range(span[t, 4], span[t, 5] + 1):
+                        c = (i * dims[1] + j) * dims[2] + k
+                        for a in range(3):
+                            lo[c, a] = min(lo[c, a], disp[u, a], disp[v, a], disp[w, a])
+                            hi[c, a] = max(hi[c, a], disp[u, a], disp[v, a], disp[w, a])
     return lo, hi
 
 

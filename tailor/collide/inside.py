@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .broad import corner_bounds
 
@@ -34,9 +34,9 @@ def _grid_triangles(xy_lo, xy_hi, origin, cell, nx, ny):
     return ptr, out
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _upward_crossings(p, vertices, faces, ptr, tri, origin, cell, nx, ny, out):
-    for k in range(len(p)):
+    for k in prange(len(p)):
         i, j = int((p[k, 0] - origin[0]) / cell), int((p[k, 1] - origin[1]) / cell)
         if i < 0 or j < 0 or i >= nx or j >= ny:
             continue
