@@ -6,7 +6,9 @@
 tailor dresses the walking mannequin in ``panels/GARMENT.json`` at each preset (sew, settle, walk
 ``--frames`` frames: the whole ``tailor drape``), timed. Blender's cloth (in a Python that has
 ``bpy``: ``pip install bpy`` in a Python 3.11 venv; skipped with a message when there is none) is
-then given tailor's dressed frame 0 (the default preset's) and simulates only the walk: the
+given tailor's dressed frame 0 (the default preset's, from the first round) and simulates only the
+walk; the rounds interleave (each preset once, then Blender once), so a machine that speeds up or
+slows down during the run does so for both: the
 welded garment mesh, quality 5, self-collision on, Blender's Cotton stiffness (tension and
 compression 15, shear 5, bending 0.5), the physical vertex mass (garment mass / vertices), air
 damping 1, the body a collider following the walk through a Mesh Cache modifier (a PC2 file
@@ -118,35 +120,48 @@ def garment_mass(result) -> float:
     return float((area * density).sum())
 
 
-def run_tailor(pattern, body, args):
-    """{preset: (median wall [s], DrapeResult)} of the whole drape at each preset, ``--rounds`` each."""
-    out = {}
-    for name in args.presets:
-        walls, result = [], None
-        for _ in range(args.rounds):
-            t = time.perf_counter()
-            result = tailor.drape(pattern, body, resolution=args.resolution, frames=args.frames, quality=name)
-            walls.append(time.perf_counter() - t)
-        out[name] = (statistics.median(walls), result)
-        print(f"tailor {name}: {', '.join(f'{w:.1f}' for w in walls)} s", file=sys.stderr, flush=True)
-    return out
+def drape_once(pattern, body, args, name):
+    """(wall [s], DrapeResult) of one whole drape at preset ``name``."""
+    t = time.perf_counter()
+    result = tailor.drape(pattern, body, resolution=args.resolution, frames=args.frames, quality=name)
+    return time.perf_counter() - t, result
 
 
-def run_blender(python, result, args, tmp: Path):
-    """(median wall [s], last frame positions) of Blender's cloth on the walk from ``result``'s frame 0."""
-    x0, faces = welded(result, 0)
-    np.savez(tmp / "scene.npz", cloth0=x0, cloth_faces=faces, body0=result.body_frames[0],
-             body_faces=result.body_faces, vertex_mass=garment_mass(result) / len(x0))
-    write_pc2(tmp / "walk.pc2", np.asarray(result.body_frames, np.float32))
-    (tmp / "part.py").write_text(BLENDER_PART)
-    walls = []
+class BlenderRun:
+    """Blender's cloth on the walk from a drape's frame 0, set up once in ``tmp``; each call is one timed round."""
+
+    def __init__(self, python, result, args, tmp: Path):
+        x0, self.faces = welded(result, 0)
+        np.savez(tmp / "scene.npz", cloth0=x0, cloth_faces=self.faces, body0=result.body_frames[0],
+                 body_faces=result.body_faces, vertex_mass=garment_mass(result) / len(x0))
+        write_pc2(tmp / "walk.pc2", np.asarray(result.body_frames, np.float32))
+        (tmp / "part.py").write_text(BLENDER_PART)
+        self.cmd = [python, str(tmp / "part.py"), str(tmp / "scene.npz"), str(tmp / "last.npy"), str(tmp / "walk.pc2"),
+                    str(args.frames)]
+        self.last = tmp / "last.npy"
+
+    def __call__(self) -> float:
+        done = subprocess.run(self.cmd, capture_output=True, text=True, check=True)
+        return json.loads(done.stdout.strip().splitlines()[-1])["wall_s"]
+
+
+def rounds(pattern, body, args, tmp: Path):
+    """({preset: (median wall, DrapeResult)}, (median wall, last positions, faces) or None): round by
+    round each preset once, then Blender once, so the machine's drift over the run hits both alike."""
+    walls, results, blender_walls, blender = {n: [] for n in args.presets}, {}, [], None
+    bpy = has_bpy(args.blender_python)
     for _ in range(args.rounds):
-        cmd = [python, str(tmp / "part.py"), str(tmp / "scene.npz"), str(tmp / "last.npy"), str(tmp / "walk.pc2"),
-               str(args.frames)]
-        done = subprocess.run(cmd, capture_output=True, text=True, check=True)
-        walls.append(json.loads(done.stdout.strip().splitlines()[-1])["wall_s"])
-        print(f"blender: {walls[-1]:.1f} s", file=sys.stderr, flush=True)
-    return statistics.median(walls), np.load(tmp / "last.npy"), faces
+        for name in args.presets:
+            wall, results[name] = drape_once(pattern, body, args, name)
+            walls[name].append(wall)
+            print(f"tailor {name}: {wall:.1f} s", file=sys.stderr, flush=True)
+        if bpy:
+            blender = blender or BlenderRun(args.blender_python, results.get(DEFAULT_QUALITY, next(iter(results.values()))),
+                                            args, tmp)
+            blender_walls.append(blender())
+            print(f"blender: {blender_walls[-1]:.1f} s", file=sys.stderr, flush=True)
+    runs = {n: (statistics.median(walls[n]), results[n]) for n in args.presets}
+    return runs, (statistics.median(blender_walls), np.load(blender.last), blender.faces) if bpy else None
 
 
 def has_bpy(python) -> bool:
@@ -165,14 +180,11 @@ def main() -> int:
     body = tailor.read_body("mannequin-walk")
     pattern = tailor.read_pattern(HERE / "panels" / f"{args.garment}.json")
     tailor.drape(pattern, body, resolution=0.08, frames=1)  # compile the kernels before timing
-    runs = run_tailor(pattern, body, args)
+    with tempfile.TemporaryDirectory() as tmp:
+        runs, blender = rounds(pattern, body, args, Path(tmp))
     reference = runs.get(DEFAULT_QUALITY, next(iter(runs.values())))[1]
     last_body = reference.body_frames[-1]
-    blender = None
-    if has_bpy(args.blender_python):
-        with tempfile.TemporaryDirectory() as tmp:
-            blender = run_blender(args.blender_python, reference, args, Path(tmp))
-    else:
+    if blender is None:
         print(f"{args.blender_python} has no bpy: Blender's part skipped (pip install bpy in a Python 3.11 venv)")
     print(f"\n{args.garment}, walking mannequin, {args.frames} frames, {args.resolution * 100:g} cm mesh "
           f"({len(welded(reference, 0)[0])} welded vertices)\n")
