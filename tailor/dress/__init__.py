@@ -106,7 +106,7 @@ def drape(pattern, body, fabric=None, *, on_frame=None, sink=None, progress=None
     if phase is not None:
         report.phases["transition"] = phase
     state, report.phases["motion"], report.max_penetration_m_per_frame, report.crossings_per_frame = animate(d, state)
-    _close(report, d, t_start, body)
+    _close(report, d, t_start)
     return DrapeResult(d.frames, d.body_frames, *d.first_topology, body.faces, pattern, report, topology=d.topology,
                        contact_forces=[c for c, _ in d.loads], attachment_forces=[a for _, a in d.loads])
 
@@ -220,7 +220,7 @@ def _header(d: Dressing, pattern, body, loops, opts: DrapeOptions) -> DrapeRepor
         ) if cond])
 
 
-def _close(report: DrapeReport, d: Dressing, t_start: float, body) -> None:
+def _close(report: DrapeReport, d: Dressing, t_start: float) -> None:
     """The report's totals once the last frame is out."""
     counters = d.integrator.counters
     report.out_of_layer_per_frame = d.out_of_layer if d.garment.pattern.pieces and not d.topology else None
