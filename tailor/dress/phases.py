@@ -61,6 +61,7 @@ class Dressing:
         self.body_frames: list = []
         self.loads: list = []  # (body contact, attachment) forces per welded vertex [N] of each frame
         self.out_of_layer: list = []  # an outfit's vertices inside a garment they should be over, per frame
+        self._layers = None  # (weld, garment of each mesh vertex, open edge of each) the counts use, per weld
         self.topology: list = []  # (first frame, mesh, weld) after each cut or tear
         self.first_topology = (garment.mesh, garment.weld)  # frame 0's
         self.constrain()
@@ -129,8 +130,23 @@ class Dressing:
             self.body_frames.append(body_x.copy())
             self.loads.append((contact, attached))
         if g.pattern.pieces:
-            self.out_of_layer.append(_out_of_layer(g, x, body_x, self.timeline.body.faces))
+            self.out_of_layer.append(self._out_of_layer(x, body_x))
         self.emitted += 1
+
+    def _out_of_layer(self, x, body_x) -> int:
+        """An outfit's vertices at ``x`` (mesh numbering) found inside a garment they should be over
+        (:func:`~tailor.outfit.out_of_order`): not the cloth of a tucked top outside its tuck, nor the
+        open edges once the seams are welded (found again only when the weld changes)."""
+        g = self.garment
+        if self._layers is None or self._layers[0] is not g.weld:
+            weld = g.weld
+            edge = np.zeros(int(weld.max()) + 1, bool)
+            edge[boundary_edges(weld[g.mesh.faces]).ravel()] = True
+            self._layers = (weld, garment_of_vertex(g.pattern, g.mesh.vertex_panel), edge[weld])
+        weld, garment, edge = self._layers
+        loose = g.untucked()
+        loose = None if loose is None else loose[weld]  # the frames' (mesh) numbering
+        return int(out_of_order(x, garment, body_x, self.timeline.body.faces, loose=loose, edge=edge).sum())
 
     def tell(self, done: int, total: int, state) -> None:
         if self.progress is not None:
@@ -158,19 +174,6 @@ class Dressing:
         self.integrator.reset()
         self.topology.append((self.emitted, self.garment.mesh, self.garment.weld.copy()))
         return state
-
-
-def _out_of_layer(g, x, body_x, body_faces) -> int:
-    """An outfit's vertices at ``x`` (mesh numbering) found inside a garment they should be over
-    (:func:`~tailor.outfit.out_of_order`): not the cloth of a tucked top outside its tuck, nor the
-    open edges once the seams are welded."""
-    mesh, weld = g.mesh, g.weld
-    loose = g.untucked()
-    loose = None if loose is None else loose[weld]  # the frames' (mesh) numbering
-    edge = np.zeros(int(weld.max()) + 1, bool)
-    edge[boundary_edges(weld[mesh.faces]).ravel()] = True
-    garment = garment_of_vertex(g.pattern, mesh.vertex_panel)
-    return int(out_of_order(x, garment, body_x, body_faces, loose=loose, edge=edge[weld]).sum())
 
 
 def _widen_merging(sewing, t: float, options: DrapeOptions) -> None:

@@ -47,6 +47,8 @@ class DrapeWriter:
             raise TailorError(f"{out}: already exists; choose another --out or pass --overwrite")
         out.parent.mkdir(parents=True, exist_ok=True)
         self.out, self.pattern = out, pattern
+        # an outfit's garments one ``o`` each: the garment of every panel
+        self._objects = [pattern.piece_of(i).name for i in range(len(pattern.panels))] if pattern.pieces else None
         self.body_faces = None if body_faces is None else np.asarray(body_faces)
         self.count = 0
         self._tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
@@ -70,11 +72,10 @@ class DrapeWriter:
         names = mesh.panel_names
         if k == 0:
             (self._tmp / "garment.mtl").write_text(mtl_text(names))
-        pieces = self.pattern.pieces
-        objects = [self.pattern.piece_of(i).name for i in range(len(names))] if pieces else None
         xw, faces = welded(frame.weld, mesh.faces, frame.x)
         text = obj_text(xw, faces, uv=mesh.uv, face_uv=mesh.faces, face_group=mesh.face_panel, group_names=names,
-                        group_objects=objects, mtl="garment.mtl", header=f"tailor drape of {self.pattern.name}, frame {k}")
+                        group_objects=self._objects, mtl="garment.mtl",
+                        header=f"tailor drape of {self.pattern.name}, frame {k}")
         (self._tmp / f"garment_{k:04d}.obj").write_text(text)
         if self.body_faces is not None:
             (self._tmp / f"body_{k:04d}.obj").write_text(obj_text(frame.body_x, self.body_faces))
