@@ -385,3 +385,23 @@ def test_a_broad_phase_over_a_span_of_walking_frames_finds_at_each_frame_the_pai
         assert len(keys) > 10 * len(points)
         assert np.array_equal(keys, np.sort(point * len(faces) + tri)), f"frame {frame}"
     assert len(collider._boxes) == 2  # two spans asked: two broad phases built, not four
+
+
+def test_kept_candidates_keep_every_row_through_moves_and_packing():
+    """The body collider's candidate rows share one array: rows that outgrow their room move to the
+    end, and the array is packed when full; every row reads back what it was last given."""
+    from tailor.collide.memory import KeptCandidates
+
+    rng = np.random.default_rng(3)
+    n, faces = 40, 500
+    kept, truth = KeptCandidates(0, np.zeros((n, 3))), {}
+    for rnd in range(40):
+        ids = np.sort(rng.choice(n, size=int(rng.integers(1, n)), replace=False))
+        keys = []
+        for i in ids:
+            truth[i] = np.sort(rng.choice(faces, size=int(rng.integers(0, 4 + rnd)), replace=False))
+            keys.append(i * faces + truth[i])
+        kept.renew(ids, np.zeros((n, 3)), np.concatenate(keys), faces, 0.01)
+        lo, hi, tri = kept.spans()
+        for i, t in truth.items():
+            assert np.array_equal(tri[lo[i]:hi[i]], t), (rnd, i)
