@@ -30,14 +30,15 @@ def _options(args):
 
 
 def _cmd_drape(args) -> int:
-    from ..dress import drape
     from ..io import read_pattern
     from ..io.body_files import read_body
     from ..io.garment import DrapeWriter
 
     formats = _formats(args.format)  # checked before a long run, not after
+    exports = [f for f in formats if f != "obj"]
+    every_frame = bool(args.fit or args.preview or exports)  # what needs the frames kept; the OBJs stream
     options = _options(args)
-    if (args.cuts or args.tear) and (args.preview or args.fit or any(f != "obj" for f in formats)):
+    if (args.cuts or args.tear) and every_frame:
         raise TailorError("--cuts/--tear change the garment's mesh during the run: only the OBJ sequence can hold "
                           "that (leave out --format, --preview and --fit)")
     check_maximum(args.fit_max)
@@ -51,11 +52,9 @@ def _cmd_drape(args) -> int:
     if args.tuck and len(patterns) < 2:
         raise TailorError("--tuck tucks a top into a bottom's waistband: give both patterns")
     pattern = outfit(patterns, tuck=args.tuck)
-    # the OBJ frames stream to disk as they come; only fit maps, other formats and previews need them all
-    keep = bool(args.fit or args.preview or any(f != "obj" for f in formats))
     t0 = time.perf_counter()
     with DrapeWriter(out, pattern, overwrite=args.overwrite, body_faces=body.faces if args.with_body else None) as writer:
-        result = _run(drape, pattern, body, replace(options, keep_frames=keep), writer, args.quiet)
+        result = _run(pattern, body, replace(options, keep_frames=every_frame), writer, args.quiet)
         fits = None
         if args.fit:
             from ..fit import FitSource, fit_section
@@ -68,14 +67,13 @@ def _cmd_drape(args) -> int:
         from ..io.fit_files import write_fit
 
         write_fit(fits, out / "fit", source.bodies, maximum=args.fit_max)
-    if any(f != "obj" for f in formats) or args.preview:
+    if exports or args.preview:
         from ..io.animation import animation_from_drape
         from ..io.export import export
 
         anim = animation_from_drape(result, with_body=args.with_body)
-        for fmt in formats:
-            if fmt != "obj":
-                export(anim, fmt, out, with_body=args.with_body)
+        for fmt in exports:
+            export(anim, fmt, out, with_body=args.with_body)
         if args.preview:
             _preview(anim, out / "preview", args)
     r = result.report
@@ -96,8 +94,10 @@ def _cmd_drape(args) -> int:
     return 0
 
 
-def _run(drape, pattern, body, options, writer, quiet: bool):
+def _run(pattern, body, options, writer, quiet: bool):
     """The drape, its frames handed to ``writer`` as they come, with progress bars on stderr."""
+    from ..dress import drape
+
     bars = PhaseBars(disable=quiet)
     try:
         return drape(pattern, body, options=options, progress=bars, sink=writer)
