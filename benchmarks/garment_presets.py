@@ -37,8 +37,8 @@ def main() -> int:
     args = p.parse_args()
     body = tailor.read_body("mannequin-walk")
     tailor.drape(tailor.read_pattern(HERE / "panels" / "tshirt.json"), body, resolution=0.08, frames=1)  # compile
-    print(f"| garment | preset | wall s | motion s | CG iterations | max penetration mm | max crossings | "
-          f"last frame vs final: mean mm | worst mm |\n|---|---|---|---|---|---|---|---|---|")
+    print("| garment | preset | wall s | motion s | CG iterations | max penetration mm | max crossings | "
+          "last frame vs final: mean mm | worst mm |\n|---|---|---|---|---|---|---|---|---|")
     for garment in args.garments:
         pattern = tailor.read_pattern(HERE / "panels" / f"{garment}.json")
         results = {}

@@ -22,7 +22,7 @@ from .collide import SELF_COLLISION_MODES, BodyCollider, Contacts, Layers, SelfC
 from .collide.cloth import PARTIAL_SHARE
 from .collide.grid import unique_edges
 from .collide.untangle import vertex_rings
-from .constraints import Attachments, Gather, HeightHold, LimbWallContact
+from .constraints import Attachments, HeightHold, LimbWallContact
 from .errors import SimulationError
 
 __all__ = ["ContactPipeline", "ContactLoads", "ContactSettings", "StaticBody", "Attachments", "HeightHold", "LimbWallContact", "BODY_MARGIN",

@@ -468,6 +468,87 @@ def test_flat_layers_lying_on_each_other_are_candidates_of_each_other_not_of_the
     assert found["auto"][2][upper, 2].min() > -0.45  # slowed: at 0.5 m/s it would have come within 0 of the lower
 
 
+def test_the_margin_narrows_while_every_step_asks_again_and_widens_when_the_cloth_is_quiet():
+    """:class:`MarginSchedule`: a full query right after the last one takes 0.7 of the margin, down
+    to the floor (0.3 of the default, at least the thickness); candidates lasting three steps widen
+    it again up to the default; while not adapting (open seams sewing) it is the default."""
+    from tailor.collide.margins import MarginSchedule
+
+    schedule = MarginSchedule(0.01, thickness=0.002)
+    assert schedule.query(True, adapt=True) == 0.01  # the first query: nothing known yet
+    margins = []
+    for _ in range(6):
+        schedule.stepped()
+        margins.append(schedule.query(True, adapt=True))
+    assert margins[:3] == pytest.approx([0.007, 0.0049, 0.00343]) and margins[-1] == pytest.approx(0.003)
+    for _ in range(3):
+        schedule.stepped()
+    assert schedule.query(False, adapt=True) == pytest.approx(0.003)  # a partial query keeps it
+    for _ in range(3):
+        schedule.stepped()
+    assert schedule.query(True, adapt=True) == pytest.approx(0.003 / 0.7)
+    schedule.stepped()
+    assert schedule.query(True, adapt=False) == 0.01
+    assert MarginSchedule(0.01, thickness=0.004).floor == 0.004
+
+
+def test_a_cloth_moving_every_step_is_asked_about_at_a_narrower_margin_and_keeps_every_near_pair():
+    """A panel sliding over another 8 mm above it, carried 12 mm a step relative to it: every step asks
+    again, so the margin narrows (fewer pairs a step) while every vertex–triangle pair within the
+    thickness after each step is among the candidates, and the panel pressed onto the other never
+    passes through it."""
+    from tailor.collide.cloth_kernels import unique_ints
+    from tailor.collide.grid import vertex_triangle_pairs
+
+    model, x0 = stacked(0.008, 0.0, offset=0.0, size=0.3, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    inv_mass = 1.0 / np.asarray(model.vertex_mass)
+    pairs = {}
+    for adapt in (True, False):
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+        if not adapt:  # open seams keep the default margin
+            collider.ignore(np.eye(1, len(x0), 0, dtype=bool)[0])
+        state = model.state(x0.copy(), np.zeros_like(x0))
+        counts = []
+        for step in range(20):
+            x = state.x.copy()
+            x[upper] += np.array([0.012, 0.0, -0.0005])
+            state = model.state(x, (x - state.x) / 0.01)
+            collider.respond(inv_mass, state, 0.01)
+            counts.append(collider.candidate_pairs)
+            rx = state.x - state.x.mean(axis=0)
+            near_v, near_t, _ = vertex_triangle_pairs(unique_ints(model.faces.ravel()), np.arange(len(model.faces)), collider.faces,
+                                                      rx, rx, rx, 0.003, collider._grid_cell, collider._ring_csr, exact=True)
+            near = set(zip(near_v.tolist(), near_t.tolist())) - {(0, t) for t in range(len(model.faces))}
+            assert near <= set(zip(collider._vtx.tolist(), collider._tri.tolist())), step
+        pairs[adapt] = (np.mean(counts[5:]), collider.stats["min_margin_m"], len(self_intersections(state.x, model.faces)))
+    assert pairs[True][1] == pytest.approx(0.003) and pairs[False][1] == 0.01
+    assert pairs[True][0] < 0.6 * pairs[False][0]
+    assert pairs[True][2] == pairs[False][2] == 0  # pressed down on the lower panel, never through it
+
+
+def test_pairs_between_two_pinned_vertices_are_never_candidates():
+    """An outfit's sewn garment is held still (pinned) while the next one sews: no pair of two pinned
+    vertices can be a contact the response could act on, so none is asked about; pairs with a free
+    vertex are, and unpinning asks again."""
+    model, x0 = stacked(0.004, 0.0, offset=0.0, size=0.1, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    inv_mass = 1.0 / np.asarray(model.vertex_mass)
+    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+    for _ in range(2):  # the second query is swept over a (still) step, as all that follow
+        collider.moved(x0)
+        collider.respond(inv_mass, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
+    everything = collider.candidate_pairs
+    pinned = np.where(upper, 0.0, inv_mass)  # the upper panel pinned, the lower free
+    collider.respond(pinned, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
+    corners = model.faces[collider._tri]
+    assert 0 < collider.candidate_pairs < everything
+    assert (~upper[collider._vtx] | ~upper[corners].all(axis=1)).all()
+    assert (~upper[collider._ee]).any(axis=1).all()
+    collider.respond(inv_mass, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
+    assert collider.candidate_pairs == everything
+
+
 @pytest.mark.parametrize("mode", ["on", "auto"])
 def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair(mode):
     """A corner flapping over a still panel: the still panel keeps its candidates (partial queries

@@ -39,9 +39,8 @@ approach slowed so that it arrives at ``thickness`` at the end of the next step.
 separated to ``thickness`` with the same weights (the centre of mass does not move). Contacts are
 relaxed Gauss–Seidel style and detection repeats until no new contact appears.
 
-Fast motion: when the ends of a candidate pair moved more than one thickness relative to each
-other in the step, the step's motion is replayed in up to :data:`MAX_SUBSTEPS` sub-steps of at most
-one thickness of that relative motion, contacts resolved after each.
+Fast motion: a step whose candidate pairs' ends moved more than one thickness relative to each other
+is replayed in up to :data:`MAX_SUBSTEPS` sub-steps of one thickness of it, contacts resolved after each.
 """
 
 from __future__ import annotations
@@ -54,13 +53,14 @@ import numpy as np
 
 from ..errors import SimulationUnstable
 from .cloth_kernels import (PARALLEL_PAIRS, detect_ee, detect_ee_serial, detect_vt, detect_vt_serial, pair_motion, resolve_contacts,
-                            present, touching, touching_vt, unique_ints)
+                            present, touching, touching_vt)
 from .grid import PairRoom, edge_edge_pairs, vertex_rings, vertex_triangle_pairs
 from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
-from .margins import self_margin
+from .open_seams import OpenSeams
+from .margins import MarginSchedule, self_margin
 from .sweep import part_boxes, sweep_parts, union_edge_edge, union_vertex_triangle
-from .regions import PATCH_EDGES, PATCH_MIN, Regions, in_sorted
+from .regions import PATCH_EDGES, PATCH_MIN, Regions
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "Layers"]
 
@@ -84,11 +84,6 @@ step beyond it and the jump (a body's push between responses, in however short a
 state, whose swept query would take minutes: it stops with :class:`SimulationUnstable` instead."""
 
 
-def _same_mask(a, b) -> bool:
-    """Whether two optional arrays (None: none) are the same."""
-    return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
-
-
 class SelfCollider:
     """Self-collision of one cloth mesh (module docstring).
 
@@ -104,7 +99,8 @@ class SelfCollider:
         Distance kept between the cloth and itself [m].
     margin : float, optional
         Extra query radius [m]; candidates live until a vertex moves ``margin / 2`` (default:
-        :func:`self_margin` of the mesh's mean edge length at ``x``).
+        :func:`self_margin` of the mesh's mean edge length at ``x``, narrower while the cloth moves
+        that far every step, :class:`~tailor.collide.margins.MarginSchedule`).
     mode : {"auto", "on"}
         ``auto`` checks only regions that can touch; ``on`` checks every vertex.
     patch : float, optional
@@ -148,6 +144,7 @@ class SelfCollider:
         length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
         mean_edge = self._mean_edge = float(np.mean(length)) if len(length) else 0.0
         self.margin = self_margin(mean_edge) if margin is None else float(margin)
+        self._margins = MarginSchedule(self.margin, self.thickness if margin is None else self.margin)
         self._grid_cell = GRID_EDGES * mean_edge if len(length) else 1.0
         if patch is None:
             patch = max(PATCH_MIN, PATCH_EDGES * mean_edge) if len(length) else 0.1
@@ -159,15 +156,12 @@ class SelfCollider:
         self._active = None  # (F,) bool: the faces the candidates were found among
         self._pairs = None  # sorted keys of the patch pairs the candidates were found among (None: all)
         self._reach = self.margin  # how deep a pair may have crossed in a step (the narrow phase cut-off beyond thickness)
-        self._vtx, self._tri = np.zeros(0, np.int64), np.zeros(0, np.int64)
-        self._tri_side = np.zeros(0, np.int8)
-        self._ee_toward = np.zeros((0, 3))
-        self._x_prev = None
-        self._ignored = None  # (N,) bool: vertices that take no part (open seams while sewing)
-        self._kept = None  # sorted vertex-pair keys that keep contact though ignored
-        self._keeping = None  # (N,) bool: the vertices of those pairs
-        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0, "max_substeps": 1, "partial_queries": 0,
-                      "query_s": 0.0, "response_s": 0.0}
+        self._vtx, self._tri, self._tri_side = np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int8)
+        self._ee_toward, self._x_prev = np.zeros((0, 3)), None
+        self._seams = OpenSeams(self.n, self._garment)  # the open seams' vertices left out while sewing
+        self._live = None  # (N,) bool: the vertices not pinned (None: all)
+        self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0,
+                      "max_substeps": 1, "partial_queries": 0, "query_s": 0.0, "response_s": 0.0, "min_margin_m": self.margin}
 
     def active_faces(self, x, vertex_boxes=None):
         """Faces that can touch themselves or one another (``auto``: :meth:`Regions.touching`), at
@@ -238,22 +232,22 @@ class SelfCollider:
         together: their patches would not be a pair that can touch). Every pair if no patch pairs."""
         if self._pairs is None:
             return NO_PATCH_PAIRS
-        return self.regions.patch_pairs(self._pairs, self._edge_patches, self._keeping).arrays()
+        return self.regions.patch_pairs(self._pairs, self._edge_patches, self._seams.keeping).arrays()
 
     def _in_touching_patches(self, vertex, tri, ee):
         """(vertex–triangle, edge–edge) candidates kept of those the filtered search let through: every
         one of a patch pair that can touch, and of those it let through for a kept pair's vertex at
         each end, only the kept pairs."""
         keep_vt, keep_ee = np.ones(len(vertex), bool), np.ones(len(ee), bool)
-        if self._pairs is None or self._kept is None:
+        if self._pairs is None or self._seams.kept is None:
             return keep_vt, keep_ee
-        free = self._keeping
+        free, kept = self._seams.keeping, self._seams.is_kept
         out = np.flatnonzero(free[vertex] & free[self.faces[tri]].any(axis=1))
         keep_vt[out] = (self.regions.allowed_vertex_triangle(self._pairs, vertex[out], tri[out])
-                        | self._is_kept(vertex[out, None], self.faces[tri[out]]).any(axis=1))
+                        | kept(vertex[out, None], self.faces[tri[out]]).any(axis=1))
         out = np.flatnonzero(free[ee[:, :2]].any(axis=1) & free[ee[:, 2:]].any(axis=1))
         keep_ee[out] = (self.regions.allowed_edge_edge(self._pairs, ee[out])
-                        | self._is_kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1))
+                        | kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1))
         return keep_vt, keep_ee
 
     def _find(self, x, boxes, faces, dirty, *, exact):
@@ -268,19 +262,14 @@ class SelfCollider:
         find = partial(vertex_triangle_pairs, faces=self.faces, x=x, radius=radius, cell=self._grid_cell,
                        ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs, room=self._rooms[0])
         edge_ids = present(self._face_edges[faces].ravel(), len(self._edges))
-        if dirty is None:
-            (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs)
+        if dirty is None:  # pairs of two pinned vertices need none (an outfit's frozen garment)
+            (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs, self._live)
         else:
             (lo, hi), = boxes
-            find = partial(find, lo=lo, hi=hi)
-            dirty_face = touching(self.faces[faces], dirty)
-            moved = dirty[verts]
-            parts = (find(verts[moved], faces), find(verts[~moved], faces[dirty_face]))
-            vertex, tri, near = (np.concatenate(p) for p in zip(*parts))
-            ee, ee_near = self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty), patch_pairs)
+            (vertex, tri, near), (ee, ee_near) = self._touching_pairs(find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs)
         keep_vt, keep_ee = self._in_touching_patches(vertex, tri, ee)
         vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
-        vertex, tri, near, ee, ee_near = self._drop_ignored(vertex, tri, near, ee, ee_near)
+        vertex, tri, near, ee, ee_near = self._seams.drop(self.faces, vertex, tri, near, ee, ee_near)
         tri_side = self._tri_sides(vertex, tri)
         if dirty is not None:  # the kept candidates: no end moved
             keep = ~touching_vt(self._vtx, self._tri, self.faces, dirty)
@@ -294,11 +283,23 @@ class SelfCollider:
         self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
 
-    def _search(self, find, verts, faces, edge_ids, boxes, patch_pairs):
-        """((vertex, triangle, near), (edge pairs, near)) of every pair whose boxes meet in one of ``boxes``."""
-        found = [(find(verts, faces, lo=lo, hi=hi), self._edge_pairs(edge_ids, lo, hi, None, patch_pairs)) for lo, hi in boxes]
+    def _search(self, find, verts, faces, edge_ids, boxes, patch_pairs, live):
+        """((vertex, triangle, near), (edge pairs, near)) of every pair (with a ``live`` vertex, if
+        given) whose boxes meet in one of ``boxes``."""
+        found = [self._touching_pairs(find, verts, faces, edge_ids, lo, hi, live, patch_pairs) for lo, hi in boxes]
         return found[0] if len(found) == 1 else (union_vertex_triangle([f[0] for f in found], len(self.faces)),
                                                  union_edge_edge([f[1] for f in found], self._edges, max(self.n, 1)))
+
+    def _touching_pairs(self, find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs):
+        """((vertex, triangle, near), (edge pairs, near)) whose boxes (lo, hi) meet: all, or (``dirty``
+        (N,) bool) those with a dirty vertex."""
+        find = partial(find, lo=lo, hi=hi)
+        if dirty is None:
+            return find(verts, faces), self._edge_pairs(edge_ids, lo, hi, None, patch_pairs)
+        moved = dirty[verts]
+        parts = (find(verts[moved], faces), find(verts[~moved], faces[touching(self.faces[faces], dirty)]))
+        return (tuple(np.concatenate(p) for p in zip(*parts)),
+                self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty), patch_pairs))
 
     def _edge_pairs(self, ids, lo, hi, dirty, patch_pairs):
         if not self.edges:
@@ -319,49 +320,10 @@ class SelfCollider:
         return self.layers.edge_directions(self._garment, self.faces, x, ee)
 
     def ignore(self, vertices, keep=None) -> None:
-        """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact, as a
-        vertex, a triangle's corner or an edge's end, except between the vertex pairs ``keep`` ((K, 2)):
-        the open seams while sewing, whose two sides must be free to meet edge to edge, while the
-        neighbourhoods of a seam's two sides still keep out of each other. Pairs between two
-        garments of an outfit (``garment``) keep contact too."""
-        mask = None if vertices is None or not np.any(vertices) else np.asarray(vertices, bool)
-        keys = None
-        if mask is not None and keep is not None and len(keep):
-            p = np.asarray(keep, np.int64).reshape(-1, 2)
-            keys = unique_ints(np.r_[p[:, 0] * self.n + p[:, 1], p[:, 1] * self.n + p[:, 0]])
-        if not (_same_mask(mask, self._ignored) and _same_mask(keys, self._kept)):
-            self._ignored, self._kept = mask, keys
-            self._keeping = None
-            if keys is not None:
-                self._keeping = np.zeros(self.n, bool)
-                self._keeping[keys // self.n] = True
+        """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact
+        except between the vertex pairs ``keep`` ((K, 2)) and between garments (:mod:`.open_seams`)."""
+        if self._seams.set(vertices, keep):
             self._anchor = None  # query again
-
-    def _is_kept(self, a, b):
-        """Whether each vertex pair (a, b) keeps contact though ignored (:meth:`ignore`)."""
-        if self._kept is None:
-            return np.zeros(np.broadcast(a, b).shape, bool)
-        return in_sorted(self._kept, a * self.n + b)
-
-    def _drop_ignored(self, vertex, tri, near, ee, ee_near):
-        """The vertex–triangle and edge–edge candidates without the ignored vertices (but the kept pairs)."""
-        if self._ignored is None:
-            return vertex, tri, near, ee, ee_near
-        corners = self.faces[tri]
-        keep = ~(self._ignored[vertex] | touching(corners, self._ignored))
-        touched = np.flatnonzero(~keep)  # only these can be saved by a kept pair
-        keep[touched] = self._is_kept(vertex[touched, None], corners[touched]).any(axis=1)
-        if self._garment is not None:
-            keep |= self._garment[vertex] != self._garment[corners[:, 0]]
-        if len(ee):
-            keep_ee = ~touching(ee, self._ignored)
-            touched = np.flatnonzero(~keep_ee)
-            a, b = ee[touched, :2], ee[touched, 2:]
-            keep_ee[touched] = self._is_kept(a[:, :, None], b[:, None, :]).reshape(len(a), 4).any(axis=1)
-            if self._garment is not None:
-                keep_ee |= self._garment[ee[:, 0]] != self._garment[ee[:, 2]]
-            ee, ee_near = ee[keep_ee], ee_near[keep_ee]
-        return vertex[keep], tri[keep], near[keep], ee, ee_near
 
     @property
     def candidate_pairs(self) -> int:
@@ -382,6 +344,7 @@ class SelfCollider:
                                      "try a smaller time step or the implicit integrator")
         self.stats["steps"] += 1
         xp = self._x_prev if self._x_prev is not None and len(self._x_prev) == len(x) else None
+        self._pin(np.asarray(inv_mass) > 0.0)
         self._update(x, xp, dt, state.t)
         xp = x if xp is None else xp
         total = 0
@@ -410,11 +373,19 @@ class SelfCollider:
         self._x_prev = x.copy()
         return total
 
+    def _pin(self, live) -> None:
+        """The vertices that can move (the others are pinned: no pair between two of them is asked about)."""
+        live = None if live.all() else live
+        same = (live is None) == (self._live is None) and (live is None or np.array_equal(live, self._live))
+        if not same:
+            self._live, self._anchor = live, None  # query again
+
     def _update(self, x, xp, dt, t) -> None:
         """The candidates for the step from ``xp`` to ``x``: found again for the vertices that moved
         ``margin / 2`` from their anchors (relative to the centroid), all of them when most did."""
         rx = x - x.mean(axis=0)
         rxp = None if xp is None else xp - xp.mean(axis=0)
+        self._margins.stepped()
         drift = self._drift(rx, rxp)
         if drift is not None and drift.max(initial=0.0) < (0.5 * self.margin) ** 2:
             return
@@ -428,6 +399,8 @@ class SelfCollider:
                 f"time step (e.g. {dt / 4:.3g} s), a coarser resolution or a less stiff fabric")
         if moving is not None and moving.mean() > self.partial:
             moving = None
+        self.margin = self._margins.query(moving is None, adapt=self._seams.ignored is None, forced=drift is None)
+        self.stats["min_margin_m"] = min(self.stats["min_margin_m"], self.margin)
         self._query(rx, rxp, step, moving)
 
     def _resolve_at(self, x, xp, v, im, dt, keys, rounds, sweeps):
@@ -488,13 +461,12 @@ class SelfCollider:
     def carry_stats(self, stats: dict) -> None:
         """Continue the counters of a collider this one replaces (welding renumbered the cloth)."""
         for k, v in stats.items():
-            self.stats[k] = max(self.stats[k], v) if k.startswith("max_") else self.stats[k] + v
+            own = self.stats[k]
+            self.stats[k] = max(own, v) if k.startswith("max_") else min(own, v) if k.startswith("min_") else own + v
 
     def report(self) -> dict:
         """What ran, for report.json."""
-        s = dict(self.stats)
-        s["mode"] = self.mode
-        s["query_s"] = round(s["query_s"], 3)
-        s["response_s"] = round(s["response_s"], 3)
-        s["patches"] = self.regions.count
-        return s
+        s = self.stats
+        return {**s, "mode": self.mode, "query_s": round(s["query_s"], 3), "response_s": round(s["response_s"], 3),
+                "patches": self.regions.count}
+

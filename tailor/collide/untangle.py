@@ -141,7 +141,7 @@ def _region_moves(x, faces, region, crossings, thickness: float):
     rim = inside[i] != inside[j]
     if not rim.any():
         return None
-    k, out = np.where(inside[i], i, j)[rim], np.where(inside[i], j, i)[rim]
+    out = np.where(inside[i], j, i)[rim]
     tri = x[faces[t[rim]]]
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
