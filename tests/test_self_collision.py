@@ -527,28 +527,6 @@ def test_a_cloth_moving_every_step_is_asked_about_at_a_narrower_margin_and_keeps
     assert pairs[True][2] == pairs[False][2] == 0  # pressed down on the lower panel, never through it
 
 
-def test_pairs_between_two_pinned_vertices_are_never_candidates():
-    """An outfit's sewn garment is held still (pinned) while the next one sews: no pair of two pinned
-    vertices can be a contact the response could act on, so none is asked about; pairs with a free
-    vertex are, and unpinning asks again."""
-    model, x0 = stacked(0.004, 0.0, offset=0.0, size=0.1, resolution=0.02)
-    upper = panel_vertices(model, 1)
-    inv_mass = 1.0 / np.asarray(model.vertex_mass)
-    collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
-    for _ in range(2):  # the second query is swept over a (still) step, as all that follow
-        collider.moved(x0)
-        collider.respond(inv_mass, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
-    everything = collider.candidate_pairs
-    pinned = np.where(upper, 0.0, inv_mass)  # the upper panel pinned, the lower free
-    collider.respond(pinned, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
-    corners = model.faces[collider._tri]
-    assert 0 < collider.candidate_pairs < everything
-    assert (~upper[collider._vtx] | ~upper[corners].all(axis=1)).all()
-    assert (~upper[collider._ee]).any(axis=1).all()
-    collider.respond(inv_mass, model.state(x0.copy(), np.zeros_like(x0)), 0.01)
-    assert collider.candidate_pairs == everything
-
-
 @pytest.mark.parametrize("mode", ["on", "auto"])
 def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair(mode):
     """A corner flapping over a still panel: the still panel keeps its candidates (partial queries

@@ -159,7 +159,6 @@ class SelfCollider:
         self._vtx, self._tri, self._tri_side = np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int8)
         self._ee_toward, self._x_prev = np.zeros((0, 3)), None
         self._seams = OpenSeams(self.n, self._garment)  # the open seams' vertices left out while sewing
-        self._live = None  # (N,) bool: the vertices not pinned (None: all)
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0,
                       "max_substeps": 1, "partial_queries": 0, "query_s": 0.0, "response_s": 0.0, "min_margin_m": self.margin}
 
@@ -262,8 +261,8 @@ class SelfCollider:
         find = partial(vertex_triangle_pairs, faces=self.faces, x=x, radius=radius, cell=self._grid_cell,
                        ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs, room=self._rooms[0])
         edge_ids = present(self._face_edges[faces].ravel(), len(self._edges))
-        if dirty is None:  # pairs of two pinned vertices need none (an outfit's frozen garment)
-            (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs, self._live)
+        if dirty is None:
+            (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs)
         else:
             (lo, hi), = boxes
             (vertex, tri, near), (ee, ee_near) = self._touching_pairs(find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs)
@@ -283,10 +282,9 @@ class SelfCollider:
         self.stats["max_active_vertices"] = max(self.stats["max_active_vertices"], len(verts))
         self.stats["max_edge_pairs"] = max(self.stats["max_edge_pairs"], len(self._ee))
 
-    def _search(self, find, verts, faces, edge_ids, boxes, patch_pairs, live):
-        """((vertex, triangle, near), (edge pairs, near)) of every pair (with a ``live`` vertex, if
-        given) whose boxes meet in one of ``boxes``."""
-        found = [self._touching_pairs(find, verts, faces, edge_ids, lo, hi, live, patch_pairs) for lo, hi in boxes]
+    def _search(self, find, verts, faces, edge_ids, boxes, patch_pairs):
+        """((vertex, triangle, near), (edge pairs, near)) of every pair whose boxes meet in one of ``boxes``."""
+        found = [self._touching_pairs(find, verts, faces, edge_ids, lo, hi, None, patch_pairs) for lo, hi in boxes]
         return found[0] if len(found) == 1 else (union_vertex_triangle([f[0] for f in found], len(self.faces)),
                                                  union_edge_edge([f[1] for f in found], self._edges, max(self.n, 1)))
 
@@ -344,7 +342,6 @@ class SelfCollider:
                                      "try a smaller time step or the implicit integrator")
         self.stats["steps"] += 1
         xp = self._x_prev if self._x_prev is not None and len(self._x_prev) == len(x) else None
-        self._pin(np.asarray(inv_mass) > 0.0)
         self._update(x, xp, dt, state.t)
         xp = x if xp is None else xp
         total = 0
@@ -372,13 +369,6 @@ class SelfCollider:
             self.stats["contacts"] += total
         self._x_prev = x.copy()
         return total
-
-    def _pin(self, live) -> None:
-        """The vertices that can move (the others are pinned: no pair between two of them is asked about)."""
-        live = None if live.all() else live
-        same = (live is None) == (self._live is None) and (live is None or np.array_equal(live, self._live))
-        if not same:
-            self._live, self._anchor = live, None  # query again
 
     def _update(self, x, xp, dt, t) -> None:
         """The candidates for the step from ``xp`` to ``x``: found again for the vertices that moved
