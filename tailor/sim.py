@@ -68,7 +68,8 @@ DEFAULT_QUALITY = "draft"
 """The preset garments drape at unless asked otherwise: the knee of the garment frontier, measured on
 the T-shirt, skirt, trousers and dress walking at 2 cm against how far ``final`` lands from itself
 (``benchmarks/garment_presets.py --floor``; the README's "Speed versus accuracy": within a few mm of
-that on the T-shirt and the skirt, about 9 mm beyond it on the trousers and the dress)."""
+that on the T-shirt, the skirt and the dress, about 9 mm beyond it on the trousers, where ``normal``
+is no nearer)."""
 
 
 def quality(name: str) -> Quality:
