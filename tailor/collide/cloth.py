@@ -265,7 +265,7 @@ class SelfCollider:
             (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs)
         else:
             (lo, hi), = boxes
-            (vertex, tri, near), (ee, ee_near) = self._touching_pairs(find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs)
+            (vertex, tri, near), (ee, ee_near) = self._pairs_meeting(find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs)
         keep_vt, keep_ee = self._in_touching_patches(vertex, tri, ee)
         vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
         vertex, tri, near, ee, ee_near = self._seams.drop(self.faces, vertex, tri, near, ee, ee_near)
@@ -284,11 +284,11 @@ class SelfCollider:
 
     def _search(self, find, verts, faces, edge_ids, boxes, patch_pairs):
         """((vertex, triangle, near), (edge pairs, near)) of every pair whose boxes meet in one of ``boxes``."""
-        found = [self._touching_pairs(find, verts, faces, edge_ids, lo, hi, None, patch_pairs) for lo, hi in boxes]
+        found = [self._pairs_meeting(find, verts, faces, edge_ids, lo, hi, None, patch_pairs) for lo, hi in boxes]
         return found[0] if len(found) == 1 else (union_vertex_triangle([f[0] for f in found], len(self.faces)),
                                                  union_edge_edge([f[1] for f in found], self._edges, max(self.n, 1)))
 
-    def _touching_pairs(self, find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs):
+    def _pairs_meeting(self, find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs):
         """((vertex, triangle, near), (edge pairs, near)) whose boxes (lo, hi) meet: all, or (``dirty``
         (N,) bool) those with a dirty vertex."""
         find = partial(find, lo=lo, hi=hi)
@@ -459,4 +459,3 @@ class SelfCollider:
         s = self.stats
         return {**s, "mode": self.mode, "query_s": round(s["query_s"], 3), "response_s": round(s["response_s"], 3),
                 "patches": self.regions.count}
-
