@@ -143,8 +143,8 @@ class SelfCollider:
         self._face_edges = face_edge.reshape(-1, 3).astype(np.int64)
         length = np.linalg.norm(np.diff(np.asarray(x, float)[self._edges], axis=1)[:, 0], axis=1)
         mean_edge = self._mean_edge = float(np.mean(length)) if len(length) else 0.0
-        self.margin = self_margin(mean_edge) if margin is None else float(margin)
-        self._margins = MarginSchedule(self.margin, self.thickness if margin is None else self.margin)
+        self._margins = MarginSchedule(self_margin(mean_edge) if margin is None else float(margin), self.thickness,
+                                       fixed=margin is not None)
         self._grid_cell = GRID_EDGES * mean_edge if len(length) else 1.0
         if patch is None:
             patch = max(PATCH_MIN, PATCH_EDGES * mean_edge) if len(length) else 0.1
@@ -161,6 +161,11 @@ class SelfCollider:
         self._seams = OpenSeams(self.n, self._garment)  # the open seams' vertices left out while sewing
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0,
                       "max_substeps": 1, "partial_queries": 0, "query_s": 0.0, "response_s": 0.0, "min_margin_m": self.margin}
+
+    @property
+    def margin(self) -> float:
+        """The query margin [m] of the candidates held (:class:`~tailor.collide.margins.MarginSchedule`)."""
+        return self._margins.value
 
     def active_faces(self, x, vertex_boxes=None):
         """Faces that can touch themselves or one another (``auto``: :meth:`Regions.touching`), at
@@ -389,7 +394,7 @@ class SelfCollider:
                 f"time step (e.g. {dt / 4:.3g} s), a coarser resolution or a less stiff fabric")
         if moving is not None and moving.mean() > self.partial:
             moving = None
-        self.margin = self._margins.query(moving is None, adapt=self._seams.ignored is None, forced=drift is None)
+        self._margins.query(moving is None, adapt=self._seams.ignored is None, forced=drift is None)
         self.stats["min_margin_m"] = min(self.stats["min_margin_m"], self.margin)
         self._query(rx, rxp, step, moving)
 

@@ -50,9 +50,10 @@ class MarginSchedule:
     query, so every candidate was found with the margin its validity is judged by.
     """
 
-    def __init__(self, default: float, thickness: float):
+    def __init__(self, default: float, thickness: float, *, fixed: bool = False):
+        # fixed: a margin the caller chose, never narrowed
         self.default = float(default)
-        self.floor = min(self.default, max(float(thickness), MARGIN_FLOOR * self.default))
+        self.floor = self.default if fixed else min(self.default, max(float(thickness), MARGIN_FLOOR * self.default))
         self.value = self.default
         self._since = None  # steps since the last query (None: none yet)
 
