@@ -190,6 +190,7 @@ class ContactPipeline:
         self._layer_thickness = None  # (numbering, (N,) body thickness per vertex) of an outfit
         self._untucked = None  # (N,) int: a tucked top's cloth outside its tuck, the garment it keeps its side against
         self._untucked_version = 0
+        self._still = None  # (N,) bool: vertices held still (hold_still)
 
     def configure(self, settings: ContactSettings) -> None:
         """What contact does from now on (a new phase)."""
@@ -209,6 +210,16 @@ class ContactPipeline:
         if (new is None) != (old is None) or (new is not None and not np.array_equal(new, old)):
             self._untucked = new
             self._untucked_version += 1  # a layered collider is built afresh with it
+
+    def hold_still(self, still) -> None:
+        """``still`` (N,) bool per vertex of the current numbering: held still until told otherwise (an
+        outfit's sewn garment while the next one sews over it); neither the self-contact
+        (:meth:`SelfCollider.hold_still`) nor the untangling looks at a pair among them alone. None: none."""
+        self._still = None if still is None or not np.any(still) else np.asarray(still, bool)
+
+    def _held_still(self, model):
+        """(N,) bool of the vertices of ``model``'s numbering held still (:meth:`hold_still`), or None."""
+        return self._still if self._still is not None and len(self._still) == model.vertex_count else None
 
     def follow(self, friction, x=None) -> None:
         """The cloth's vertices were welded or moved between steps (their count changed; the colliders
@@ -282,6 +293,7 @@ class ContactPipeline:
         if self.self_mode != "off" and self.settings.self_collision:
             collider = self.self_collider(model, state.x, bx)
             collider.ignore(*self._open_seams(model))
+            collider.hold_still(self._held_still(model))
             # pinned vertices (attached, a tuck's gathered cloth) do not move: read each step, since
             # pins change without the vertex count changing
             collider.respond(np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass)), state, dt)
@@ -382,7 +394,7 @@ class ContactPipeline:
         key = (model.vertex_count, self._version)
         rings, edges = self._topology(model)
         inv_mass = np.where(model.vertex_pinned, 0.0, 1.0 / np.asarray(model.vertex_mass))
-        found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=rings, edges=edges)
+        found, left = untangle(state.x, model.faces, inv_mass, self.thickness, rings=rings, edges=edges, still=self._held_still(model))
         if found:
             if self._self is not None and self._self_key[:2] == key:
                 self._self.moved(state.x)

@@ -141,8 +141,8 @@ def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_
     dirty = rng.random(n) < 0.8
     grid = Grid(lo - 0.02, hi + 0.02, 0.02)
     ring = (np.zeros(2 * n + 1, np.int64), np.zeros(0, np.int64))
-    args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02, *ring,
-            NO_PATCH_PAIRS)
+    args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02,
+            np.zeros(n), *ring, NO_PATCH_PAIRS)
     (want, want_near), (got, got_near) = _ee_pairs(*args), _ee_pairs_guessed(*args, _GUESS_PAIRS)
     first = np.isin(want[:, 0] // 2, np.arange(_GUESS_CHUNK)).sum()
     assert first > _GUESS_CHUNK * _GUESS_PAIRS and len(want) - first > 100  # one chunk overflowed, the others did not
@@ -235,3 +235,33 @@ def test_searches_filtered_by_patch_pairs_find_what_the_patches_filter_keeps_of_
     allowed = regions.allowed_edge_edge(pairs, e0)
     keep = allowed | (free[e0[:, :2]].any(axis=1) & free[e0[:, 2:]].any(axis=1))
     assert allowed.sum() < keep.sum() < len(keep) and np.array_equal(e1, e0[keep])
+
+
+def test_pairs_with_padded_ends_are_those_within_the_radius_plus_both_pads_as_brute_force_finds():
+    """Each vertex's pad (its own reach beyond the radius: half the self-contact margin for a vertex
+    that may drift, none for one held still) widens the search pair by pair: a vertex–triangle pair
+    within the radius plus the vertex's pad plus the largest of the triangle's corners', an edge pair
+    within the radius plus both edges' largest; pairs of two unpadded elements only within the radius."""
+    rng = np.random.default_rng(12)
+    x, f, lo, hi = _soup(rng, n=500, faces=700, spread=0.12)
+    pad = np.where(rng.random(len(x)) < 0.5, 0.0, 0.006)
+    ring = _ring(len(x), f)[:2]
+    radius = 0.004
+
+    def gap(a_lo, a_hi, b_lo, b_hi):
+        return np.linalg.norm(np.maximum(0.0, np.maximum(b_lo[None] - a_hi[:, None], a_lo[:, None] - b_hi[None])), axis=2)
+
+    v, t, _ = vertex_triangle_pairs(np.arange(len(x)), np.arange(len(f)), f, lo, hi, x, radius, 0.02, ring, exact=False, pad=pad)
+    reach = radius + pad[:, None] + pad[f].max(axis=1)[None]
+    want = (gap(lo, hi, lo[f].min(axis=1), hi[f].max(axis=1)) <= reach) & ~(f[None] == np.arange(len(x))[:, None, None]).any(axis=2)
+    assert set(zip(v.tolist(), t.tolist())) == set(zip(*np.nonzero(want)))
+    assert want.sum() > len(x)  # enough pairs for the test to mean something
+    edges = np.unique(np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    got, _ = edge_edge_pairs(np.arange(len(edges)), edges, lo, hi, radius, 0.02, ring, pad=pad)
+    e_lo, e_hi, e_pad = lo[edges].min(axis=1), hi[edges].max(axis=1), pad[edges].max(axis=1)
+    close = gap(e_lo, e_hi, e_lo, e_hi) <= radius + e_pad[:, None] + e_pad[None]
+    shared = (edges[:, None, :, None] == edges[None, :, None, :]).any(axis=(2, 3))
+    i, j = np.nonzero(np.triu(close & ~shared, 1))
+    key = {tuple(sorted((tuple(edges[a]), tuple(edges[b])))) for a, b in zip(i, j)}
+    assert {tuple(sorted((tuple(r[:2]), tuple(r[2:])))) for r in got.tolist()} == key
+    assert len(got) > len(edge_edge_pairs(np.arange(len(edges)), edges, lo, hi, radius, 0.02, ring)[0])

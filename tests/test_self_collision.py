@@ -527,6 +527,47 @@ def test_a_cloth_moving_every_step_is_asked_about_at_a_narrower_margin_and_keeps
     assert pairs[True][2] == pairs[False][2] == 0  # pressed down on the lower panel, never through it
 
 
+@pytest.mark.parametrize("gap, speed", [(0.014, 0.3), (0.0185, 0.4)])
+def test_a_panel_pressed_onto_one_held_still_keeps_every_near_pair_with_half_the_reach(gap, speed):
+    """An outfit's sewn garment is held still while the next sews over it. A panel pressed down 3–4 mm
+    a step onto a panel held still: a pair with a still end approaches only by its moving end's drift,
+    so it is searched within the thickness plus half the margin (fewer candidates than the whole
+    margin), no pair of two still vertices is a candidate, and still every vertex–triangle pair
+    within the thickness after each step is among the candidates (anchored to the still panel: the
+    cloth's centroid, dragged down by the moving panel, would let pairs slip past), and the
+    pressed panel never passes through."""
+    from tailor.collide.cloth_kernels import unique_ints
+    from tailor.collide.grid import vertex_triangle_pairs
+
+    model, x0 = stacked(gap, 0.0, offset=0.0, size=0.2, resolution=0.02)
+    upper = panel_vertices(model, 1)
+    inv_mass = np.where(upper, 1.0 / np.asarray(model.vertex_mass), 0.0)
+    faces = np.arange(len(model.faces))
+    counts = {}
+    for hold in (True, False):
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on")
+        state = model.state(x0.copy(), np.zeros_like(x0))
+        counts[hold] = []
+        for step in range(12):
+            if hold:
+                collider.hold_still(~upper)
+            v = np.where(upper[:, None], np.array([0.0, 0.0, -speed]), 0.0)
+            state = model.state(state.x + 0.01 * v, v)
+            collider.respond(inv_mass, state, 0.01)
+            counts[hold].append(collider.candidate_pairs)
+            assert np.array_equal(state.x[~upper], x0[~upper])
+            held = set(zip(collider._vtx.tolist(), collider._tri.tolist()))
+            near_v, near_t, _ = vertex_triangle_pairs(unique_ints(model.faces.ravel()), faces, collider.faces, state.x, state.x,
+                                                      state.x, 0.003, collider._grid_cell, collider._ring_csr, exact=True)
+            assert set(zip(near_v.tolist(), near_t.tolist())) <= held, (hold, step)
+            if hold:
+                assert (upper[collider._vtx] | upper[model.faces[collider._tri]].any(axis=1)).all()
+        assert len(self_intersections(state.x, model.faces)) == 0
+        assert state.x[upper, 2].min() > 0.002  # resting on the still panel
+    assert max(counts[True]) > 0
+    assert sum(counts[True]) < 0.8 * sum(counts[False])
+
+
 @pytest.mark.parametrize("mode", ["on", "auto"])
 def test_candidates_found_again_only_where_the_cloth_moved_still_hold_every_near_pair(mode):
     """A corner flapping over a still panel: the still panel keeps its candidates (partial queries

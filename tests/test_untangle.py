@@ -45,6 +45,26 @@ def test_pinned_vertices_stay_and_the_free_side_takes_the_whole_push():
     assert x[25 + 12, 2] == pytest.approx(0.001)  # the whole push: thickness above the pinned sheet
 
 
+def test_crossings_among_vertices_held_still_alone_are_neither_looked_for_nor_undone():
+    """An outfit's sewn garment is held still while the next sews over it: its own crossings (a sheet
+    through a sheet, both still) can neither have been made since it was last looked at nor be
+    undone; a moving sheet poked through a still one is found and pushed back as ever."""
+    poke, poke_faces = _two_sheets(0.006)
+    tangle, tangle_faces = _sheet_through_sheet()
+    x = np.vstack([poke, tangle + [1.0, 0.0, 0.0]])
+    faces = np.vstack([poke_faces, tangle_faces + len(poke)])
+    still = np.ones(len(x), bool)
+    still[25:50] = False  # the poked sheet moves
+    every = edge_crossings(x, faces)
+    among_still = still[every[:, :2]].all(axis=1) & still[faces[every[:, 2]]].all(axis=1)
+    assert among_still.any() and (~among_still).any()
+    got = edge_crossings(x, faces, still=still)
+    assert {tuple(r) for r in got.tolist()} == {tuple(r) for r in every[~among_still].tolist()}
+    found, left = untangle(x, faces, np.where(still, 0.0, 1.0), 0.001, still=still)
+    assert found == int((~among_still).sum()) and left == 0
+    assert len(edge_crossings(x, faces)) == int(among_still.sum())  # the still tangle as it was
+
+
 def _sheet_through_sheet():
     # a sheet straight through another, edge-on: half of it on each side, no side to push to
     mesh = grid(0.1, 0.1, 6)

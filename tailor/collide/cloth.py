@@ -16,7 +16,10 @@ threshold distance from the cloth's vertices") runs in three stages:
    a Python object each). Each vertex is anchored where it was last queried; a pair stays valid
    while neither end moves ``margin / 2`` from its anchor (they approach by less than ``margin``).
    A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices that have
-   (the others' anchors are their boxes), unless most have.
+   (the others' anchors are their boxes), unless most have. Vertices held still (an outfit's sewn
+   garment while the next sews over it, :meth:`SelfCollider.hold_still`) are the frame instead of
+   the centroid: a pair of two of them is no candidate, and one with a still end approaches only by
+   its other end's drift, so it is searched within ``thickness + margin / 2``.
 3. **Narrow phase** (compiled): a vertex whose projection falls on a candidate triangle not at the
    vertex is a contact if it is nearer than ``thickness``, if its velocity would bring it nearer
    within the next step, or if it crossed the triangle's plane since the last step (judged by the
@@ -59,6 +62,7 @@ from .patch_pairs import NO_PATCH_PAIRS
 from .layers import Layers
 from .open_seams import OpenSeams
 from .margins import MarginSchedule, self_margin
+from .still import StillVertices
 from .sweep import part_boxes, sweep_parts, union_edge_edge, union_vertex_triangle
 from .regions import PATCH_EDGES, PATCH_MIN, Regions
 
@@ -159,6 +163,7 @@ class SelfCollider:
         self._vtx, self._tri, self._tri_side = np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int8)
         self._ee_toward, self._x_prev = np.zeros((0, 3)), None
         self._seams = OpenSeams(self.n, self._garment)  # the open seams' vertices left out while sewing
+        self._still = StillVertices()  # vertices held still (hold_still)
         self.stats = {"steps": 0, "active_steps": 0, "queries": 0, "contacts": 0, "max_active_vertices": 0, "max_edge_pairs": 0,
                       "max_substeps": 1, "partial_queries": 0, "query_s": 0.0, "response_s": 0.0, "min_margin_m": self.margin}
 
@@ -259,14 +264,18 @@ class SelfCollider:
         step, or each part of it: :mod:`.sweep`): all of them, or (``dirty`` (N,) bool, the step whole)
         the pairs touching a dirty vertex added to the kept ones that touch none."""
         verts = present(self.faces[faces].ravel(), self.n)
-        radius = self.thickness + self.margin
+        radius, pad = self._still.reach(self.thickness, self.margin)
         # a triangle at the vertex is never a contact; one touching its 1-ring only once crossed
         # (ignoring those, a strip crumpling over one or two triangles passed through itself)
         patch_pairs = self._patch_pairs()
         find = partial(vertex_triangle_pairs, faces=self.faces, x=x, radius=radius, cell=self._grid_cell,
-                       ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs, room=self._rooms[0])
+                       ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs, room=self._rooms[0], pad=pad)
         edge_ids = present(self._face_edges[faces].ravel(), len(self._edges))
-        if dirty is None:
+        if dirty is None and self._still.mask is not None and len(boxes) == 1:  # pairs among the still left out
+            (lo, hi), = boxes
+            (vertex, tri, near), (ee, ee_near) = self._pairs_meeting(find, verts, faces, edge_ids, lo, hi, ~self._still.mask,
+                                                                     patch_pairs)
+        elif dirty is None:
             (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs)
         else:
             (lo, hi), = boxes
@@ -274,6 +283,7 @@ class SelfCollider:
         keep_vt, keep_ee = self._in_touching_patches(vertex, tri, ee)
         vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
         vertex, tri, near, ee, ee_near = self._seams.drop(self.faces, vertex, tri, near, ee, ee_near)
+        vertex, tri, near, ee, ee_near = self._still.drop(self.faces, vertex, tri, near, ee, ee_near)
         tri_side = self._tri_sides(vertex, tri)
         if dirty is not None:  # the kept candidates: no end moved
             keep = ~touching_vt(self._vtx, self._tri, self.faces, dirty)
@@ -307,8 +317,9 @@ class SelfCollider:
     def _edge_pairs(self, ids, lo, hi, dirty, patch_pairs):
         if not self.edges:
             return np.zeros((0, 4), np.int64), np.zeros(0, bool)
-        return edge_edge_pairs(ids, self._edges, lo, hi, self.thickness + self.margin, self._grid_cell, self._ring_csr,
-                               dirty=dirty, patch_pairs=patch_pairs, room=self._rooms[1])
+        radius, pad = self._still.reach(self.thickness, self.margin)
+        return edge_edge_pairs(ids, self._edges, lo, hi, radius, self._grid_cell, self._ring_csr,
+                               dirty=dirty, patch_pairs=patch_pairs, room=self._rooms[1], pad=pad)
 
     def _tri_sides(self, vertex, tri):
         """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""
@@ -326,6 +337,12 @@ class SelfCollider:
         """From now on the ``vertices`` ((N,) bool, or None for none) take no part in any contact
         except between the vertex pairs ``keep`` ((K, 2)) and between garments (:mod:`.open_seams`)."""
         if self._seams.set(vertices, keep):
+            self._anchor = None  # query again
+
+    def hold_still(self, still) -> None:
+        """From now on the vertices ``still`` ((N,) bool, or None for none) do not move (pinned):
+        :mod:`.still` says what the candidates then leave out."""
+        if self._still.set(still):
             self._anchor = None  # query again
 
     @property
@@ -378,8 +395,8 @@ class SelfCollider:
     def _update(self, x, xp, dt, t) -> None:
         """The candidates for the step from ``xp`` to ``x``: found again for the vertices that moved
         ``margin / 2`` from their anchors (relative to the centroid), all of them when most did."""
-        rx = x - x.mean(axis=0)
-        rxp = None if xp is None else xp - xp.mean(axis=0)
+        rx = x - self._still.origin(x)
+        rxp = None if xp is None else xp - self._still.origin(xp)
         self._margins.stepped()
         drift = self._drift(rx, rxp)
         if drift is not None and drift.max(initial=0.0) < (0.5 * self.margin) ** 2:

@@ -102,12 +102,14 @@ def _edge_crossings(x, faces, edges, origin, cell, dims):
     return res
 
 
-def edge_crossings(vertices, faces, edges=None) -> np.ndarray:
+def edge_crossings(vertices, faces, edges=None, still=None) -> np.ndarray:
     """(K, 3): the edges (two vertex indices) of a mesh that pass through one of its own triangles
     sharing no vertex with them, and that triangle. Empty: the mesh does not pass through itself.
 
     ``edges``: the mesh's :func:`~tailor.collide.grid.unique_edges`, if the caller keeps them (a check
-    every frame of one mesh)."""
+    every frame of one mesh). ``still`` ((N,) bool, optional): vertices held still; an edge and a
+    triangle all of whose vertices are still are not tested (nothing can have moved them through
+    each other since they were last looked at, and nothing can part them)."""
     x = np.ascontiguousarray(vertices, dtype=np.float64)
     faces = np.ascontiguousarray(faces, dtype=np.int64)
     if not len(faces):
@@ -119,5 +121,12 @@ def edge_crossings(vertices, faces, edges=None) -> np.ndarray:
     used[edges.ravel()] = True
     lo, hi = x[used].min(axis=0), x[used].max(axis=0)
     grid = Grid(lo[None], hi[None], cell)
-    pairs = _edge_crossings(x, faces, edges, grid.origin, grid.cell, grid.dims)
-    return np.column_stack([edges[pairs[:, 0]], pairs[:, 1]]) if len(pairs) else np.zeros((0, 3), np.int64)
+    if still is None:
+        parts = [(edges, np.arange(len(faces)))]
+    else:  # the moving edges through any triangle, the still ones through a triangle that moves
+        moving_edge, moving_face = ~np.asarray(still, bool)[edges].all(axis=1), ~np.asarray(still, bool)[faces].all(axis=1)
+        parts = [(edges[moving_edge], np.arange(len(faces))), (edges[~moving_edge], np.flatnonzero(moving_face))]
+    found = [np.column_stack([e[pairs[:, 0]], tri[pairs[:, 1]]])
+             for e, tri in parts if len(e) and len(tri)
+             for pairs in [_edge_crossings(x, np.ascontiguousarray(faces[tri]), e, grid.origin, grid.cell, grid.dims)]]
+    return np.concatenate(found).astype(np.int64) if found else np.zeros((0, 3), np.int64)

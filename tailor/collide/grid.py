@@ -20,7 +20,7 @@ from numba import njit, prange
 from .closest import closest_barycentric
 from .patch_pairs import NO_PATCH_PAIRS, edge_edge_passes, vertex_triangle_passes
 
-__all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "gap2", "owns", "vertex_triangle_pairs", "edge_edge_pairs", "MAX_CELLS", "PairRoom"]
+__all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "gap2", "owns", "vertex_triangle_pairs", "edge_edge_pairs", "element_pads", "MAX_CELLS", "PairRoom"]
 
 MAX_CELLS = 1 << 21
 """Cells a grid holds, about (one more per axis at most: 16 MB of cell pointers); coarser cells beyond."""
@@ -223,13 +223,13 @@ def _joined(out, out_near, used, room):
 
 @njit(cache=True)
 def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell, dims,
-            r, exact, patch_pairs, limit=-1):
+            r, v_pad, t_pad, pad_max, exact, patch_pairs, limit=-1):
     """Write (rows (vertex, triangle) of ``out`` from ``start``) and count the triangles within ``r``
-    of active vertex ``q``; with ``limit`` ≥ 0 none is written at or beyond it (they are still counted)."""
+    of active vertex ``q``, the two's pads (``v_pad[q]``, ``t_pad[t]``, at most ``pad_max``) added; with
+    ``limit`` ≥ 0 none is written at or beyond it (they are still counted)."""
     p = verts[q]
     found = 0
-    r2 = r * r
-    i0, j0, k0, i1, j1, k1 = cell_span(v_lo[q], v_hi[q], r, origin, cell, dims)
+    i0, j0, k0, i1, j1, k1 = cell_span(v_lo[q], v_hi[q], r + v_pad[q] + pad_max, origin, cell, dims)
     for c in range(k0, k1 + 1):
         for b in range(j0, j1 + 1):
             for a in range(i0, i1 + 1):
@@ -237,9 +237,11 @@ def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo
                 for m in range(ptr[key], ptr[key + 1]):
                     t = items[m]
                     f = faces[tris[t]]
+                    rp = r + v_pad[q] + t_pad[t]
+                    r2 = rp * rp
                     if _shares(p, f) or gap2(v_lo[q], v_hi[q], t_lo[t], t_hi[t]) > r2:
                         continue
-                    if not owns(v_lo[q], t_lo[t], r, a, b, c, origin, cell, dims):
+                    if not owns(v_lo[q], t_lo[t], rp, a, b, c, origin, cell, dims):
                         continue
                     if not vertex_triangle_passes(patch_pairs, p, f, tris[t]):
                         continue
@@ -262,16 +264,18 @@ def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo
 
 
 @njit(cache=True, parallel=True)
-def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, exact, ring_ptr, ring_idx, patch_pairs, per):
+def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, v_pad, t_pad, exact, ring_ptr, ring_idx, patch_pairs,
+              per):
     """The triangles of every active vertex in one pass where they fit, ``per`` a vertex (as :func:`_ee_pairs_guessed`)."""
     ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
+    pad_max = t_pad.max() if len(t_pad) else 0.0
     n = len(verts)
     chunks, room, out, out_near, used = _chunk_room(n, per, 2)
     for ch in prange(chunks):
         written = 0
         for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
             written += _vt_one(q, out, out_near, ch * room + written, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris,
-                               faces, x, ptr, items, origin, cell, dims, r, exact, patch_pairs, (ch + 1) * room)
+                               faces, x, ptr, items, origin, cell, dims, r, v_pad, t_pad, pad_max, exact, patch_pairs, (ch + 1) * room)
         used[ch] = written
     pairs, near, starts = _joined(out, out_near, used, room)
     for ch in range(chunks):
@@ -279,7 +283,7 @@ def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims,
             pos = starts[ch]
             for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
                 pos += _vt_one(q, pairs, near, pos, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items,
-                               origin, cell, dims, r, exact, patch_pairs)
+                               origin, cell, dims, r, v_pad, t_pad, pad_max, exact, patch_pairs)
     return pairs, near
 
 
@@ -299,11 +303,14 @@ def _boxes_of(lo, hi, elements, rows):
 
 
 def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool,
-                          patch_pairs=NO_PATCH_PAIRS, room: PairRoom | None = None):
+                          patch_pairs=NO_PATCH_PAIRS, room: PairRoom | None = None, pad=None):
     """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
     ``verts`` against each of the triangles ``tris`` (rows of ``faces``) not at it whose boxes come
     within ``radius``; ``near``: whether a corner of the triangle is a neighbour of the vertex
     (``ring`` = (ptr, idx): each vertex's neighbours, CSR: :func:`vertex_rings`).
+
+    ``pad`` (N,), optional: each vertex's own reach beyond ``radius`` [m]; a pair then comes within
+    ``radius`` plus the vertex's pad plus the largest of the triangle's corners' (:func:`element_pads`).
 
     ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step; both ``x`` for points).
     With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``. Only the
@@ -318,10 +325,12 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     faces = np.ascontiguousarray(faces, np.int64)
     t_lo, t_hi = _boxes_of(lo, hi, faces, tris)
     v_lo, v_hi = lo[verts], hi[verts]
-    grid = Grid(np.vstack([t_lo.min(axis=0), v_lo.min(axis=0) - radius]), np.vstack([t_hi.max(axis=0), v_hi.max(axis=0) + radius]),
+    v_pad, t_pad = element_pads(pad, verts[:, None], len(verts)), element_pads(pad, faces[tris], len(tris))
+    reach = radius + float(v_pad.max(initial=0.0)) + float(t_pad.max(initial=0.0))
+    grid = Grid(np.vstack([t_lo.min(axis=0), v_lo.min(axis=0) - reach]), np.vstack([t_hi.max(axis=0), v_hi.max(axis=0) + reach]),
                 cell)
     pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
-                            grid.cell, grid.dims, float(radius), bool(exact), *ring, patch_pairs,
+                            grid.cell, grid.dims, float(radius), v_pad, t_pad, bool(exact), *ring, patch_pairs,
                             _GUESS_TRIANGLES if room is None else room.per)
     if room is not None:
         room.learn(len(pairs), len(verts))
@@ -330,14 +339,13 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
 
 @njit(cache=True)
 def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin, cell, dims, r,
-            patch_pairs, limit=-1):
-    """Count (``fill`` False) or write the edges within ``r`` of edge ``q``, sharing no end: every
-    clean one, and the dirty ones after it (each dirty pair once); with ``limit`` ≥ 0 none is written
-    at or beyond it (they are still counted)."""
+            pad, pad_max, patch_pairs, limit=-1):
+    """Count (``fill`` False) or write the edges within ``r`` of edge ``q``, the two's pads (``pad``,
+    at most ``pad_max``) added, sharing no end: every clean one, and the dirty ones after it (each
+    dirty pair once); with ``limit`` ≥ 0 none is written at or beyond it (they are still counted)."""
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
-    r2 = r * r
-    i0, j0, k0, i1, j1, k1 = cell_span(e_lo[q], e_hi[q], r, origin, cell, dims)
+    i0, j0, k0, i1, j1, k1 = cell_span(e_lo[q], e_hi[q], r + pad[q] + pad_max, origin, cell, dims)
     for c in range(k0, k1 + 1):
         for b in range(j0, j1 + 1):
             for a in range(i0, i1 + 1):
@@ -349,9 +357,10 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                     b0, b1 = edges[ids[s], 0], edges[ids[s], 1]
                     if a0 == b0 or a0 == b1 or a1 == b0 or a1 == b1:
                         continue
-                    if gap2(e_lo[q], e_hi[q], e_lo[s], e_hi[s]) > r2:
+                    rp = r + pad[q] + pad[s]
+                    if gap2(e_lo[q], e_hi[q], e_lo[s], e_hi[s]) > rp * rp:
                         continue
-                    if not owns(e_lo[q], e_lo[s], r, a, b, c, origin, cell, dims):
+                    if not owns(e_lo[q], e_lo[s], rp, a, b, c, origin, cell, dims):
                         continue
                     if not edge_edge_passes(patch_pairs, ids[q], ids[s], a0, a1, b0, b1):
                         continue
@@ -369,11 +378,12 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx, patch_pairs, per):
+def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, pad, ring_ptr, ring_idx, patch_pairs, per):
     """:func:`_ee_pairs` in one pass where it can: each chunk of :data:`_GUESS_CHUNK` queries writes
     into room for ``per`` pairs a query; the chunks' pairs are joined in order and only a chunk that
     overflowed is searched again, straight into its place (the same pairs, in the same order)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
+    pad_max = pad.max() if len(pad) else 0.0
     nq = len(queries)
     chunks, room, out, out_near, used = _chunk_room(nq, per, 4)
     for ch in prange(chunks):
@@ -381,7 +391,7 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
         written = 0
         for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
             written += _ee_one(queries[k], True, out, out_near, first + written, ring_ptr, ring_idx, ids, edges, e_lo, e_hi,
-                               dirty, ptr, items, origin, cell, dims, r, patch_pairs, end)
+                               dirty, ptr, items, origin, cell, dims, r, pad, pad_max, patch_pairs, end)
         used[ch] = written
     pairs, near, starts = _joined(out, out_near, used, room)
     for ch in range(chunks):
@@ -389,49 +399,62 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
             pos = starts[ch]
             for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
                 pos += _ee_one(queries[k], True, pairs, near, pos, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items,
-                               origin, cell, dims, r, patch_pairs)
+                               origin, cell, dims, r, pad, pad_max, patch_pairs)
     return pairs, near
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, ring_ptr, ring_idx, patch_pairs):
+def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, pad, ring_ptr, ring_idx, patch_pairs):
     """The edge pairs of every query, counted in one pass and written in a second: the reference
     :func:`_ee_pairs_guessed` is checked against (tests/test_grid.py)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
+    pad_max = pad.max() if len(pad) else 0.0
     counts = np.zeros(len(queries), np.int64)
     dummy = np.zeros((0, 4), np.int64)
     no = np.zeros(0, np.bool_)
     for k in prange(len(queries)):
         counts[k] = _ee_one(queries[k], False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
-                            cell, dims, r, patch_pairs)
+                            cell, dims, r, pad, pad_max, patch_pairs)
     starts = np.zeros(len(queries) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out = np.empty((starts[-1], 4), np.int64)
     out_near = np.empty(starts[-1], np.bool_)
     for k in prange(len(queries)):
         _ee_one(queries[k], True, out, out_near, starts[k], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
-                cell, dims, r, patch_pairs)
+                cell, dims, r, pad, pad_max, patch_pairs)
     return out, out_near
 
 
+def element_pads(pad, elements, count: int) -> np.ndarray:
+    """(count,) each element's pad: the largest of its vertices' (``elements`` (count, m) vertex
+    indices); zeros without ``pad``. A pair of elements is searched within the radius plus both pads:
+    an element whose every vertex is held still needs none of the reach its vertices' drift would."""
+    if pad is None:
+        return np.zeros(count)
+    return np.ascontiguousarray(np.asarray(pad, np.float64)[elements].max(axis=1) if count else np.zeros(0))
+
+
 def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None, patch_pairs=NO_PATCH_PAIRS,
-                    room: PairRoom | None = None):
+                    room: PairRoom | None = None, pad=None):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
     share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
     pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
     :func:`vertex_triangle_pairs`). With ``dirty`` ((len(ids),) bool), only the pairs with at least
     one dirty edge (the others are known from an earlier query). Only the pairs ``patch_pairs`` lets
-    through (as in :func:`vertex_triangle_pairs`; its edges are the rows of ``edges``); ``room`` as there."""
+    through (as in :func:`vertex_triangle_pairs`; its edges are the rows of ``edges``); ``room`` and
+    ``pad`` as there."""
     ids = np.ascontiguousarray(ids, np.int64)
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
     dirty = np.ones(len(ids), np.bool_) if dirty is None else np.ascontiguousarray(dirty, np.bool_)
     edges = np.ascontiguousarray(edges, np.int64)
     e_lo, e_hi = _boxes_of(np.ascontiguousarray(lo, np.float64), np.ascontiguousarray(hi, np.float64), edges, ids)
-    grid = Grid(e_lo.min(axis=0)[None] - radius, e_hi.max(axis=0)[None] + radius, cell)
+    e_pad = element_pads(pad, edges[ids], len(ids))
+    reach = radius + 2.0 * float(e_pad.max())
+    grid = Grid(e_lo.min(axis=0)[None] - reach, e_hi.max(axis=0)[None] + reach, cell)
     queries = np.flatnonzero(dirty).astype(np.int64)
-    pairs, near = _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, grid.origin, grid.cell, grid.dims, float(radius), *ring,
-                                    patch_pairs, _GUESS_PAIRS if room is None else room.per)
+    pairs, near = _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, grid.origin, grid.cell, grid.dims, float(radius), e_pad,
+                                    *ring, patch_pairs, _GUESS_PAIRS if room is None else room.per)
     if room is not None:
         room.learn(len(pairs), len(queries))
     return pairs, near

@@ -32,6 +32,8 @@ piece is never moved (a sheet cut in two by another has no wrong side to tell).
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -158,7 +160,7 @@ def _region_moves(x, faces, region, crossings, thickness: float):
     return moves
 
 
-def _untangle_regions(x, faces, inv_mass, thickness: float, crossings, edges):
+def _untangle_regions(x, faces, inv_mass, thickness: float, crossings, find):
     """The regions the ``crossings`` cut off moved back, in place, each kept only when the crossings
     drop; the crossings left."""
     for region in cut_regions(len(x), faces, crossings):
@@ -166,7 +168,7 @@ def _untangle_regions(x, faces, inv_mass, thickness: float, crossings, edges):
         moves = _region_moves(x, faces, region, crossings, thickness) if len(region) else None
         if moves is None:
             continue
-        after = edge_crossings(x + moves, faces, edges)
+        after = find(x + moves)
         if len(after) < len(crossings):
             x += moves
             crossings = after
@@ -274,19 +276,19 @@ def _hooks(i, j, t, faces, borders: _Borders):
     return out
 
 
-def _slide_borders(x, faces, inv_mass, thickness: float, crossings, edges, borders):
+def _slide_borders(x, faces, inv_mass, thickness: float, crossings, find, borders):
     """:func:`_border_slides` applied in place when it lowers the crossings; the crossings left."""
     moves = _border_slides(x, faces, inv_mass, thickness, crossings, borders)
     if moves is None:
         return crossings
-    after = edge_crossings(x + moves, faces, edges)
+    after = find(x + moves)
     if len(after) < len(crossings):
         x += moves
         return after
     return crossings
 
 
-def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, edges, rounds: int):
+def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, find, rounds: int):
     """Up to ``rounds`` rounds of local pushes, in place, each kept only when the crossings drop;
     the crossings left."""
     for _ in range(rounds):
@@ -295,7 +297,7 @@ def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, edges,
         for joint in (True, False):  # every crossing by both ends' side; only the clear pokes when that is stuck
             y = x.copy()
             _push(y, inv_mass, faces, crossings, rings, thickness, joint)
-            after = edge_crossings(y, faces, edges)
+            after = find(y)
             if len(after) < len(crossings):
                 break
         if len(after) >= len(crossings):  # a tangle these local pushes make no better: left as it is
@@ -305,31 +307,37 @@ def _local_rounds(x, faces, inv_mass, thickness: float, crossings, rings, edges,
     return crossings
 
 
-def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROUNDS, rings=None, edges=None):
+def untangle(x, faces, inv_mass, thickness: float, *, rounds: int = UNTANGLE_ROUNDS, rings=None, edges=None, still=None):
     """Push apart, in place, the edges of ``faces`` that pass through their own triangles at ``x``:
     rounds of local pushes, then the regions cut off by what is left moved back, and again while
     that helps (at most :data:`GLOBAL_PASSES` times).
 
     ``inv_mass`` (N,) is 1/m per vertex (0: pinned or attached). Returns (crossings found, crossings
     left): both from :func:`~tailor.collide.crossings.edge_crossings`, before the first and after the
-    last round.
+    last round; with ``still`` ((N,) bool: vertices held still), not those among still vertices alone.
     """
     faces = np.asarray(faces, np.int64)
     inv_mass = np.asarray(inv_mass, float)
     rings = vertex_rings(faces, len(x)) if rings is None else rings
     edges = unique_edges(faces, len(x)) if edges is None else edges
-    crossings = edge_crossings(x, faces, edges)
+    find = partial(_crossings_at, faces=faces, edges=edges, still=still)
+    crossings = find(x)
     found = len(crossings)
     borders = None  # found only when the local and region moves are stuck
     for _ in range(GLOBAL_PASSES):
-        crossings = _local_rounds(x, faces, inv_mass, thickness, crossings, rings, edges, rounds)
+        crossings = _local_rounds(x, faces, inv_mass, thickness, crossings, rings, find, rounds)
         if not len(crossings):
             break
         before = len(crossings)
-        crossings = _untangle_regions(x, faces, inv_mass, thickness, crossings, edges)
+        crossings = _untangle_regions(x, faces, inv_mass, thickness, crossings, find)
         if len(crossings) == before:
             borders = _Borders(faces, len(x)) if borders is None else borders
-            crossings = _slide_borders(x, faces, inv_mass, thickness, crossings, edges, borders)
+            crossings = _slide_borders(x, faces, inv_mass, thickness, crossings, find, borders)
         if len(crossings) == before:
             break
     return found, len(crossings)
+
+
+def _crossings_at(x, *, faces, edges, still):
+    """The crossings at positions ``x`` (:func:`~tailor.collide.crossings.edge_crossings`)."""
+    return edge_crossings(x, faces, edges, still)

@@ -150,6 +150,16 @@ class Garment:
             raise ValueError("an outfit's waiting garments must be numbered after the ones sewing")
         return count
 
+    @property
+    def still(self):
+        """(simulated vertices,) bool: those held still (:attr:`frozen`, an outfit's sewn garments while
+        the next sews over them); None when none is."""
+        if not len(self.frozen):
+            return None
+        out = np.zeros(self.model.vertex_count, bool)
+        out[self.weld[self.frozen]] = True
+        return out
+
     def tuck(self, ids, into: int) -> None:
         """Mesh vertices ``ids`` of the garments inside ``into`` tucked under its band: held (pinned)
         while it sews, free again once the outfit is attached (:meth:`attach`), and the inner layer

@@ -85,6 +85,7 @@ class Dressing:
             gather = Gather(*self.gathering, TUCK_GATHER_TIME, g.weld)
         self.contacts.constrain(walls, self.attachments, held, gather)
         self.contacts.untucked(g.untucked() if self.phase.moving else None)
+        self.contacts.hold_still(g.still)
 
     @property
     def frame_dt(self) -> float:
