@@ -683,3 +683,27 @@ def test_pairs_kept_across_an_open_seam_stay_candidates_where_their_patches_lie_
     keys = set((keep[:, 0] * len(x0) + keep[:, 1]).tolist())
     kept = [any(int(v) * len(x0) + int(c) in keys for c in f) for v, f in zip(collider._vtx[within], corners[within])]
     assert len(kept) > 100 and all(kept)  # the sheet's own candidates: every one a kept pair, and there are many
+
+
+def test_nearly_parallel_edges_whose_common_normal_swings_are_never_read_as_crossed():
+    """Two nearly parallel 4 mm edges (a pleat's walls pressed together) stay 0.7 mm apart or more all
+    along a step, but their common normal turns by most of a right angle: the side read in the last
+    step's normal is no memory, so the pair is a contact by proximity (0.96 mm apart, under the 1 mm
+    thickness), not a crossing to push 2 mm back through (a 256² sheet on the sphere was pinched
+    3.6× that way)."""
+    from tailor.collide.cloth_kernels import detect_ee_serial
+
+    xp = np.array([[0.0, 0.0, 0.0], [0.004, 0.0, 0.0], [0.000672, -0.000823, -0.000207], [0.004667, -0.000638, -0.000171]])
+    x = np.array([[0.0, 0.0, 0.0], [0.004, 0.0, 0.0], [0.000919, -0.000971, -0.000619], [0.004831, -0.000962, 0.000216]])
+    s = np.linspace(0.0, 1.0, 41)
+    apart = min(np.linalg.norm((y[0] + s[:, None] * (y[1] - y[0]))[:, None] - (y[2] + s[:, None] * (y[3] - y[2]))[None], axis=2).min()
+                for y in (xp + k * (x - xp) for k in s))
+    assert apart > 0.0006  # they never pass through each other
+    n_prev, n_now = (np.cross(y[1] - y[0], y[3] - y[2]) for y in (xp, x))
+    assert abs(n_prev @ n_now) < 0.5 * np.linalg.norm(n_prev) * np.linalg.norm(n_now)  # the normal swung beyond 60°
+    oi, oa, on, oh = np.empty((1, 4), np.int64), np.empty((1, 4)), np.empty((1, 3)), np.empty(1)
+    hit = np.zeros(1, bool)
+    detect_ee_serial(x, xp, np.zeros((4, 3)), 0.002, np.array([[0, 1, 2, 3]]), np.zeros(1, bool), np.zeros((1, 3)), 0.001, 0.006,
+                     oi, oa, on, oh, hit, 0, np.arange(1))
+    assert hit[0]
+    assert (oa[0][:, None] * x[oi[0]]).sum(axis=0) @ on[0] == pytest.approx(0.00096, abs=2e-5)  # on the side it is on
