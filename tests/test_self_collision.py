@@ -687,7 +687,7 @@ def test_pairs_kept_across_an_open_seam_stay_candidates_where_their_patches_lie_
 
 def test_nearly_parallel_edges_whose_common_normal_swings_are_never_read_as_crossed():
     """Two nearly parallel 4 mm edges (a pleat's walls pressed together) stay 0.7 mm apart or more all
-    along a step, but their common normal turns by most of a right angle: the side read in the last
+    along a step, but their common normal turns by 78°: the side read in the last
     step's normal is no memory, so the pair is a contact by proximity (0.96 mm apart, under the 1 mm
     thickness), not a crossing to push 2 mm back through (a 256² sheet on the sphere was pinched
     3.6× that way)."""
@@ -700,7 +700,7 @@ def test_nearly_parallel_edges_whose_common_normal_swings_are_never_read_as_cros
                 for y in (xp + k * (x - xp) for k in s))
     assert apart > 0.0006  # they never pass through each other
     n_prev, n_now = (np.cross(y[1] - y[0], y[3] - y[2]) for y in (xp, x))
-    assert abs(n_prev @ n_now) < 0.5 * np.linalg.norm(n_prev) * np.linalg.norm(n_now)  # the normal swung beyond 60°
+    assert abs(n_prev @ n_now) < 0.3 * np.linalg.norm(n_prev) * np.linalg.norm(n_now)  # the normal swung beyond 72°
     oi, oa, on, oh = np.empty((1, 4), np.int64), np.empty((1, 4)), np.empty((1, 3)), np.empty(1)
     hit = np.zeros(1, bool)
     detect_ee_serial(x, xp, np.zeros((4, 3)), 0.002, np.array([[0, 1, 2, 3]]), np.zeros(1, bool), np.zeros((1, 3)), 0.001, 0.006,

@@ -170,14 +170,14 @@ def detect_vt_serial(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, re
         _vt_pair(sel[j], x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, reach, out_i, out_a, out_n, out_h, hit)
 
 
-SWUNG = 0.25
+SWUNG = 0.1
 """cos² of the angle by which an edge pair's common normal may turn in a step and still carry its
-side memory (60°). Nearly parallel edges (the two walls of a pleat pressed together, their grid
-edges aligned) have a common normal that swings with millimetres of motion; the side read in the
-last step's normal is then noise, and a pair read as crossed is pushed through by millimetres
-(a 256² sheet on the sphere pinched 3.6× at a pleat's foot). Such a pair keeps the side it is on
-now: a contact by proximity or approach, never a crossing (the vertex–triangle pairs of the two
-walls still hold them apart)."""
+side memory (72°). Nearly parallel edges (the two walls of a pleat pressed together, their grid
+edges aligned) have a common normal that swings with fractions of a millimetre of motion; the side
+read in the last step's normal is then noise, and a pair read as crossed is pushed through by
+millimetres (a 256² sheet on the sphere pinched 3.6× at a pleat's foot). Such a pair keeps the side
+it is on now: a contact by proximity or approach, never a crossing (the vertex–triangle pairs of
+the two walls still hold them apart). docs/measurements.md, thirty-first day."""
 
 
 @njit(cache=True, inline="always")
