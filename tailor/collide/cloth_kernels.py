@@ -171,14 +171,14 @@ def detect_vt_serial(x, xp, vel, dt, faces, vtx, tri, near, fixed, thickness, re
 
 
 SWUNG = 0.1
-"""cos² of the angle by which an edge pair's common normal may turn in a step and the pair still be
-judged (72°). Nearly parallel edges (the two walls of a pleat pressed together, their grid edges
-aligned) have a common normal that swings with fractions of a millimetre of motion; the side read
-in the last step's normal is then noise, and a pair read as crossed is pushed through by
-millimetres (a 256² sheet on the sphere pinched 3.6× at a pleat's foot). Such a pair is no contact
-that step: the vertex–triangle pairs of the two walls hold them apart (judged instead by the side
-they are on now, the 64² sheet's steps were halved 278 times against 29: a pair that had crossed was
-held crossed). docs/measurements.md, thirty-first day."""
+"""cos² of the angle by which an edge pair's common normal may turn in a step and still carry its
+side memory (72°). Nearly parallel edges (the two walls of a pleat pressed together, their grid
+edges aligned) have a common normal that swings with fractions of a millimetre of motion; the side
+read in the last step's normal is then noise, and a pair read as crossed is pushed through by
+millimetres (a 256² sheet on the sphere pinched 3.6× at a pleat's foot). Such a pair keeps the side
+it is on now: a contact by proximity or approach, never a crossing. It costs halved steps where a
+pair had truly crossed (the 64² sheet at ``normal``: 278 against 29); leaving such pairs out instead
+stopped a GarmentCode T-shirt at the armpit. docs/measurements.md, thirty-first day."""
 
 
 @njit(cache=True, inline="always")
@@ -191,9 +191,9 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, ou
     pa = (1 − s)·a0 + s·a1 and pb = (1 − t)·b0 + t·b1 give the stencil α = (1 − s, s, −(1 − t), −t)
     and the normal n = (a1 − a0) × (b1 − b0) / |…|, oriented by side memory like the vertex–triangle
     case: the sign of (pa − pb)·n before this step (it flips only when the edges pass through each
-    other). Pairs whose closest points fall on an end (a vertex: the vertex–triangle test covers it),
-    that are parallel within 0.06° (the normal is undefined) or whose normal swung more than
-    :data:`SWUNG` allows since the last step (the side is unknown) are left out; ``near`` pairs (ends
+    other), unless the normal swung more than :data:`SWUNG` allows. Pairs whose closest points
+    fall on an end (a vertex: the vertex–triangle test covers it) or that are parallel within 0.06°
+    (the normal is undefined) are left out; ``near`` pairs (ends
     in each other's 1-ring) keep a smaller distance, as in :func:`detect_vt`. A non-zero
     ``toward[k]`` overrides the side memory: edge a belongs on the side of edge b that vector points
     to (an outfit's layers), as ``fixed`` does in :func:`_vt_pair`.
@@ -230,7 +230,7 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, ou
     if turned < 0.0:
         g_prev = -g_prev  # the edges turned over each other: keep the sign in today's normal
     if turned * turned < SWUNG * _dot(n_prev, n_prev):
-        return  # their common normal swung (nearly parallel edges): no side to keep; the vertex–triangle pairs hold them
+        g_prev = 0.0  # their common normal swung (nearly parallel edges): the side it gave is no memory
     side = (1.0 if g_prev > 0.0 else -1.0) if g_prev != 0.0 else (1.0 if g_now >= 0.0 else -1.0)
     pull = _dot(n, (toward[k, 0], toward[k, 1], toward[k, 2]))
     if pull != 0.0:
