@@ -126,7 +126,9 @@ def edge_crossings(vertices, faces, edges=None, still=None) -> np.ndarray:
     else:  # the moving edges through any triangle, the still ones through a triangle that moves
         moving_edge, moving_face = ~np.asarray(still, bool)[edges].all(axis=1), ~np.asarray(still, bool)[faces].all(axis=1)
         parts = [(edges[moving_edge], np.arange(len(faces))), (edges[~moving_edge], np.flatnonzero(moving_face))]
-    found = [np.column_stack([e[pairs[:, 0]], tri[pairs[:, 1]]])
-             for e, tri in parts if len(e) and len(tri)
-             for pairs in [_edge_crossings(x, np.ascontiguousarray(faces[tri]), e, grid.origin, grid.cell, grid.dims)]]
-    return np.concatenate(found).astype(np.int64) if found else np.zeros((0, 3), np.int64)
+    found = [np.zeros((0, 3), np.int64)]
+    for e, tri in parts:
+        if len(e) and len(tri):
+            pairs = _edge_crossings(x, np.ascontiguousarray(faces[tri]), e, grid.origin, grid.cell, grid.dims)
+            found.append(np.column_stack([e[pairs[:, 0]], tri[pairs[:, 1]]]).astype(np.int64))
+    return np.concatenate(found)
