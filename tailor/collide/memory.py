@@ -8,12 +8,17 @@ from numba import njit
 
 from .drift import BodyDrift
 
-__all__ = ["KeptCandidates", "LandingTests", "LastResponse", "same_positions", "per_vertex"]
+__all__ = ["KeptCandidates", "LandingTests", "LastResponse", "same_positions", "same_optional", "per_vertex"]
 
 
 def same_positions(a, b) -> bool:
     """Whether two arrays of body positions are the same (a still body is handed over again and again)."""
     return a is b or np.array_equal(a, b)
+
+
+def same_optional(a, b) -> bool:
+    """Whether two optional arrays (None: none) are the same."""
+    return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
 
 
 class KeptCandidates:

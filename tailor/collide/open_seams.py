@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .cloth_kernels import touching, unique_ints
+from .memory import same_optional
 from .regions import in_sorted
 
 __all__ = ["OpenSeams"]
@@ -35,7 +36,7 @@ class OpenSeams:
         if mask is not None and keep is not None and len(keep):
             p = np.asarray(keep, np.int64).reshape(-1, 2)
             keys = unique_ints(np.r_[p[:, 0] * self.n + p[:, 1], p[:, 1] * self.n + p[:, 0]])
-        if _same(mask, self.ignored) and _same(keys, self.kept):
+        if same_optional(mask, self.ignored) and same_optional(keys, self.kept):
             return False
         self.ignored, self.kept, self.keeping = mask, keys, None
         if keys is not None:
@@ -69,8 +70,3 @@ class OpenSeams:
                 keep_ee |= self.garment[ee[:, 0]] != self.garment[ee[:, 2]]
             ee, ee_near = ee[keep_ee], ee_near[keep_ee]
         return vertex[keep], tri[keep], near[keep], ee, ee_near
-
-
-def _same(a, b) -> bool:
-    """Whether two optional arrays (None: none) are the same."""
-    return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))

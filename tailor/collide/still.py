@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .cloth_kernels import touching, touching_vt
+from .memory import same_optional
 
 __all__ = ["StillVertices"]
 
@@ -26,11 +27,10 @@ class StillVertices:
     def set(self, still) -> bool:
         """``still`` ((N,) bool, or None for none) from now on; returns whether that changed anything."""
         still = None if still is None or not np.any(still) else np.asarray(still, bool)
-        old = self.mask
-        if (still is None) != (old is None) or (still is not None and not np.array_equal(still, old)):
-            self.mask = still
-            return True
-        return False
+        if same_optional(still, self.mask):
+            return False
+        self.mask = still
+        return True
 
     def origin(self, x) -> np.ndarray:
         """The point vertices at ``x`` are anchored relative to: the still vertices' centroid, else the
