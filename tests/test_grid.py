@@ -265,3 +265,42 @@ def test_pairs_with_padded_ends_are_those_within_the_radius_plus_both_pads_as_br
     key = {tuple(sorted((tuple(edges[a]), tuple(edges[b])))) for a, b in zip(i, j)}
     assert {tuple(sorted((tuple(r[:2]), tuple(r[2:])))) for r in got.tolist()} == key
     assert len(got) > len(edge_edge_pairs(np.arange(len(edges)), edges, lo, hi, radius, 0.02, ring)[0])
+
+
+def test_compiled_bounds_are_numpys_for_points_and_triangles_and_nan_reaches_them():
+    from tailor.collide.bounds import axis_bounds, triangle_bounds
+
+    rng = np.random.default_rng(5)
+    x, f, _, _ = _soup(rng)
+    lo, hi = axis_bounds(x)
+    assert np.array_equal(lo, x.min(axis=0)) and np.array_equal(hi, x.max(axis=0))
+    t_lo, t_hi = triangle_bounds(x, f, 2)
+    assert np.array_equal(t_lo, x[f][:, :, :2].min(axis=1)) and np.array_equal(t_hi, x[f][:, :, :2].max(axis=1))
+    x[17, 1] = np.nan
+    assert np.isnan(axis_bounds(x)[0]).all() and np.isnan(axis_bounds(x)[1]).all()
+    with pytest.raises(ValueError):
+        axis_bounds(np.zeros((0, 3)))
+
+
+def test_each_patchs_normal_cone_is_its_faces_mean_normal_and_widest_angle_from_it():
+    """:meth:`Regions._cones` against the definition on a folded sheet: the mean of a patch's
+    area-weighted normals, and the largest angle between it and a face's normal (a flat patch 0,
+    the patches along the fold near 180°)."""
+    from tailor.collide.regions import Regions
+    from tailor.scenes import grid as sheet
+
+    mesh = sheet(0.4, 0.4, 21)
+    faces = np.asarray(mesh.faces, np.int64)
+    x = np.c_[mesh.uv, np.zeros(len(mesh.uv))]
+    x[:, 0] = np.where(x[:, 0] > 0.3, 0.6 - x[:, 0], x[:, 0])  # folded back over itself along x = 0.3
+    x[mesh.uv[:, 0] > 0.3, 2] += 0.008
+    regions = Regions(faces, np.zeros(len(faces), np.int64), x, 0.05)
+    mean, spread = regions._cones(x)
+    n = np.cross(x[faces[:, 1]] - x[faces[:, 0]], x[faces[:, 2]] - x[faces[:, 0]])
+    for p in range(regions.count):
+        mine = n[regions.face_patch == p]
+        m = mine.sum(axis=0) / np.linalg.norm(mine.sum(axis=0))
+        cos = (mine / np.linalg.norm(mine, axis=1)[:, None]) @ m
+        assert np.allclose(mean[p], m, atol=1e-12)
+        assert spread[p] == pytest.approx(np.arccos(np.clip(cos.min(), -1.0, 1.0)), abs=1e-6)
+    assert spread.min() < 1e-6 and spread.max() > 0.9 * np.pi  # flat patches, and ones holding the fold

@@ -15,6 +15,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from .bounds import axis_bounds
 from .grid import Grid, bin_boxes, cell_span, gap2, owns, unique_edges
 
 __all__ = ["edge_crossings"]
@@ -119,7 +120,7 @@ def edge_crossings(vertices, faces, edges=None, still=None) -> np.ndarray:
     cell = max(2.0 * float(np.mean(length)), 1e-6)
     used = np.zeros(len(x), bool)
     used[edges.ravel()] = True
-    lo, hi = x[used].min(axis=0), x[used].max(axis=0)
+    lo, hi = axis_bounds(x[used])
     grid = Grid(lo[None], hi[None], cell)
     if still is None:
         parts = [(edges, np.arange(len(faces)))]

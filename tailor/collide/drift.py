@@ -16,6 +16,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from .bounds import axis_bounds
 from .grid import MAX_CELLS
 
 __all__ = ["BodyDrift", "DRIFT_CELL"]
@@ -40,8 +41,9 @@ class BodyDrift:
         x_from, x_to = np.asarray(x_from, np.float64), np.asarray(x_to, np.float64)
         faces = np.ascontiguousarray(faces, np.int64)
         self.still = x_from is x_to
-        lo_all = x_to.min(axis=0) - reach
-        span = x_to.max(axis=0) + reach - lo_all
+        lo_all, hi_all = axis_bounds(x_to)
+        lo_all = lo_all - reach
+        span = hi_all + reach - lo_all
         cell = max(float(cell), float(np.cbrt(np.prod(span + 1e-9) / MAX_CELLS)))
         self.origin, self.cell = lo_all, cell
         self.dims = np.maximum(np.ceil(span / cell).astype(np.int64), 1)

@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from .bounds import axis_bounds
 from .closest import closest_barycentric
 from .patch_pairs import NO_PATCH_PAIRS, edge_edge_passes, vertex_triangle_passes
 
@@ -327,8 +328,9 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     v_lo, v_hi = lo[verts], hi[verts]
     v_pad, t_pad = element_pads(pad, verts[:, None], len(verts)), element_pads(pad, faces[tris], len(tris))
     reach = radius + float(v_pad.max(initial=0.0)) + float(t_pad.max(initial=0.0))
-    grid = Grid(np.vstack([t_lo.min(axis=0), v_lo.min(axis=0) - reach]), np.vstack([t_hi.max(axis=0), v_hi.max(axis=0) + reach]),
-                cell)
+    (t_min, _), (_, t_max) = axis_bounds(t_lo), axis_bounds(t_hi)
+    (v_min, _), (_, v_max) = axis_bounds(v_lo), axis_bounds(v_hi)
+    grid = Grid(np.vstack([t_min, v_min - reach]), np.vstack([t_max, v_max + reach]), cell)
     pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
                             grid.cell, grid.dims, float(radius), v_pad, t_pad, bool(exact), *ring, patch_pairs,
                             _GUESS_TRIANGLES if room is None else room.per)
@@ -451,7 +453,7 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dir
     e_lo, e_hi = _boxes_of(np.ascontiguousarray(lo, np.float64), np.ascontiguousarray(hi, np.float64), edges, ids)
     e_pad = element_pads(pad, edges[ids], len(ids))
     reach = radius + 2.0 * float(e_pad.max())
-    grid = Grid(e_lo.min(axis=0)[None] - reach, e_hi.max(axis=0)[None] + reach, cell)
+    grid = Grid(axis_bounds(e_lo)[0][None] - reach, axis_bounds(e_hi)[1][None] + reach, cell)
     queries = np.flatnonzero(dirty).astype(np.int64)
     pairs, near = _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, grid.origin, grid.cell, grid.dims, float(radius), e_pad,
                                     *ring, patch_pairs, _GUESS_PAIRS if room is None else room.per)

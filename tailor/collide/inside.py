@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .broad import corner_bounds
+from .bounds import axis_bounds, triangle_bounds
 
 __all__ = ['points_inside', 'InsideTest']
 
@@ -82,10 +82,9 @@ class InsideTest:
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self.cell = float(cell)
-        corners = self.vertices[:, :2][self.faces]
-        xy_lo, xy_hi = corner_bounds(corners)
-        self.origin = xy_lo.min(axis=0) - cell
-        self.nx, self.ny = (int((xy_hi.max(axis=0) - self.origin)[k] / cell) + 2 for k in range(2))
+        xy_lo, xy_hi = triangle_bounds(self.vertices, self.faces, 2)
+        self.origin = axis_bounds(xy_lo)[0] - cell
+        self.nx, self.ny = (int((axis_bounds(xy_hi)[1] - self.origin)[k] / cell) + 2 for k in range(2))
         self.ptr, self.tri = _grid_triangles(xy_lo, xy_hi, self.origin, self.cell, self.nx, self.ny)
 
     def __call__(self, points) -> np.ndarray:

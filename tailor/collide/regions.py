@@ -129,6 +129,7 @@ class Regions:
         self.count = int(patch.max()) + 1 if len(patch) else 0
         self._order = np.argsort(patch, kind="stable")
         self._starts = np.searchsorted(patch[self._order], np.arange(self.count))
+        self._sorted_faces = np.ascontiguousarray(self.faces[self._order], np.int64)  # grouped by patch
         # each patch's vertices (CSR, grouped by patch): its box is theirs, a sixth of the faces' corners
         corner_keys = unique_ints(np.repeat(patch, 3).astype(np.int64) * max(self.n, 1) + self.faces.ravel())
         self._patch_vertices = corner_keys % max(self.n, 1)
@@ -210,10 +211,39 @@ class Regions:
 
     def _cones(self, x):
         """Each patch's normal cone at ``x``: (unit mean normals (P, 3), half-angles (P,) [rad])."""
-        corners = x[self.faces[self._order]]  # (F, 3, 3) sorted by patch
-        fn = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])  # area-weighted normals
-        mean = np.add.reduceat(fn, self._starts)
-        mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
-        unit = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
-        cos_face = np.einsum("ij,ij->i", unit, np.repeat(mean, np.diff(np.append(self._starts, len(unit))), axis=0))
-        return mean, np.arccos(np.clip(np.minimum.reduceat(cos_face, self._starts), -1.0, 1.0))
+        return _patch_cones(np.ascontiguousarray(x, np.float64), self._sorted_faces, self._starts)
+
+
+@njit(cache=True, inline="always")
+def _face_normal(x, face):
+    """The area-weighted normal (twice the area, unnormalised) of triangle ``face`` at ``x``."""
+    a, b, c = x[face[0]], x[face[1]], x[face[2]]
+    u0, u1, u2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    v0, v1, v2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    return u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
+
+
+@njit(cache=True)
+def _patch_cones(x, faces, starts):
+    """(unit mean normals (P, 3), half-angles (P,) [rad]) of the patches whose faces are
+    ``faces[starts[p]:starts[p + 1]]``: the mean of the area-weighted normals, and the widest angle
+    between it and a face's own normal."""
+    count = len(starts)
+    mean = np.zeros((count, 3))
+    spread = np.zeros(count)
+    for p in range(count):
+        f0, f1 = starts[p], starts[p + 1] if p + 1 < count else len(faces)
+        m0, m1, m2 = 0.0, 0.0, 0.0
+        for k in range(f0, f1):
+            n0, n1, n2 = _face_normal(x, faces[k])
+            m0, m1, m2 = m0 + n0, m1 + n1, m2 + n2
+        length = max(math.sqrt(m0 * m0 + m1 * m1 + m2 * m2), 1e-300)
+        m0, m1, m2 = m0 / length, m1 / length, m2 / length
+        lowest = np.inf
+        for k in range(f0, f1):
+            n0, n1, n2 = _face_normal(x, faces[k])
+            size = max(math.sqrt(n0 * n0 + n1 * n1 + n2 * n2), 1e-300)
+            lowest = min(lowest, (n0 * m0 + n1 * m1 + n2 * m2) / size)
+        mean[p, 0], mean[p, 1], mean[p, 2] = m0, m1, m2
+        spread[p] = math.acos(min(max(lowest, -1.0), 1.0))
+    return mean, spread

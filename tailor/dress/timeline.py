@@ -15,8 +15,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import get_num_threads
 from scipy.spatial import cKDTree
 
+from ..collide.bounds import axis_bounds
 from .options import SETTLE_RAMP, TRANSITION_KEYS_PER_S, transition_seconds
 
 __all__ = ["Timeline", "NearBodySpeed"]
@@ -63,8 +65,10 @@ class NearBodySpeed:
         cloth = float(np.sqrt((v * v).sum(axis=1).max())) if len(v) else 0.0
         reach = self.margin + (float(speed.max()) + 2.0 * cloth + 1.0) * duration + self.edge
         # only the body vertices within the cloth's box grown by the reach can be within reach of it
-        box = np.flatnonzero(((body_x >= x.min(axis=0) - reach) & (body_x <= x.max(axis=0) + reach)).all(axis=1))
-        d, nearest = cKDTree(x).query(body_x[box], distance_upper_bound=reach)
+        lo, hi = axis_bounds(x)
+        box = np.flatnonzero(((body_x >= lo - reach) & (body_x <= hi + reach)).all(axis=1))
+        # on the threads the compiled kernels use (a walk asks for 6 000 body points a frame)
+        d, nearest = cKDTree(x).query(body_x[box], distance_upper_bound=reach, workers=get_num_threads())
         hit = np.isfinite(d)
         near, nearest = box[hit], nearest[hit]
         if not len(near):
