@@ -193,6 +193,32 @@ def test_only_body_points_that_can_reach_the_cloth_limit_the_moving_step_by_thei
     assert speed(cloth, np.full_like(cloth, 30.0), frames[0], 0.04, (0.0, 0.04)) == pytest.approx(30.0 * np.sqrt(3.0))
 
 
+def test_the_transition_steps_at_the_settling_step_unless_the_body_near_the_cloth_is_fast():
+    """The body's way from its rest pose into the motion's first frame is quasi-static (only its end is
+    kept): stepped as settling is, where the near-body rule allows; the motion keeps the preset's step."""
+    from tailor.dress.timeline import Timeline
+    from tailor.model import State
+
+    cube = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                     [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    rest = np.array([[x, y, z] for x in (0.0, 0.1) for y in (0.0, 0.1) for z in (0.0, 0.1)])
+    frames = np.stack([rest + [0.05 + 0.01 * k, 0.0, 0.0] for k in range(3)])  # 5 cm from the rest pose
+    body = Body(frames, cube, fps=25.0, rest=rest)
+    cloth = np.array([[0.05, 0.05, 0.12], [0.06, 0.05, 0.12]])
+
+    def steps(travel):
+        timeline = Timeline(body, 0.02, settle_step=0.04)
+        timeline.follow_collider(0.03, travel)
+        timeline.start_transition(0.0)
+        during = timeline.moving_step(State(cloth, np.zeros_like(cloth), 0.0), 0.04)
+        timeline.start_motion(timeline.transition_s)
+        return during, timeline.moving_step(State(cloth, np.zeros_like(cloth), timeline.transition_s), 0.04)
+
+    assert steps(0.015) == (0.04, 0.02)  # the box eases in at 0.25 m/s: 4 cm steps carry it 1 cm
+    during, moving = steps(0.005)  # a step may carry the body only 5 mm through the cloth
+    assert during == pytest.approx(0.005 / 0.25) and moving == pytest.approx(0.02)
+
+
 @pytest.mark.parametrize("garment, resolution, frames", [
     ("dress", 0.04, 3), ("circle_skirt", 0.04, 3),
     pytest.param("dress", 0.02, 50, marks=pytest.mark.slow), pytest.param("tshirt", 0.02, 50, marks=pytest.mark.slow),

@@ -190,7 +190,9 @@ class Timeline:
     def moving_step(self, state, duration: float) -> float | None:
         """The step for the next ``duration`` s while the body moves: only body points near the cloth
         count (a swinging hand far from a T-shirt does not shorten its steps), by their speed relative
-        to the cloth nearest them (:class:`NearBodySpeed`)."""
+        to the cloth nearest them (:class:`NearBodySpeed`). The transition into the motion's first
+        frame is, like settling, quasi-static (only its end, the dressed frame 0, is kept): its steps
+        are the settling step's, shortened by the same near-body rule."""
         if self.still_step is None:
             return None
         if self._near is None or self.max_speed <= 0:
@@ -198,7 +200,9 @@ class Timeline:
         bx = self.at(state.t)[0]
         start = self.motion_start
         span = None if start is None else (state.t - start, state.t - start + duration)
+        longest = self.still_step if span is not None else max(self.still_step, self.settle_step)
         fastest = self._near(state.x, state.v, bx, duration, span)
-        dt = min(self.still_step, self.travel / fastest) if fastest > 0 else self.still_step
-        self.steps_used.append(dt)
+        dt = min(longest, self.travel / fastest) if fastest > 0 else longest
+        if span is not None:  # the motion's steps, as the report gives them
+            self.steps_used.append(dt)
         return dt
