@@ -15,7 +15,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import get_num_threads
 from scipy.spatial import cKDTree
 
 from ..collide.bounds import axis_bounds
@@ -67,8 +66,7 @@ class NearBodySpeed:
         # only the body vertices within the cloth's box grown by the reach can be within reach of it
         lo, hi = axis_bounds(x)
         box = np.flatnonzero(((body_x >= lo - reach) & (body_x <= hi + reach)).all(axis=1))
-        # on the threads the compiled kernels use (a walk asks for 6 000 body points a frame)
-        d, nearest = cKDTree(x).query(body_x[box], distance_upper_bound=reach, workers=get_num_threads())
+        d, nearest = cKDTree(x).query(body_x[box], distance_upper_bound=reach)
         hit = np.isfinite(d)
         near, nearest = box[hit], nearest[hit]
         if not len(near):
