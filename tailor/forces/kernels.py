@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit, prange
 
 __all__ = [
+    "green_strain_into",
     "membrane_forces_into",
     "bending_forces_into",
     "membrane_jacobian_into",
@@ -454,3 +455,21 @@ def face_stretch_into(x, faces, dm, out):
             c += c1 * c2
         half = 0.5 * (a + b)
         out[f] = math.sqrt(half + math.sqrt(max(half * half - (a * b - c * c), 0.0)))
+
+
+@njit(cache=True, parallel=True)
+def green_strain_into(x, faces, dm, e11, e22, e12):
+    """Green strain (E₁₁, E₂₂, E₁₂) of each triangle into the three (F,) arrays: ½(FᵀF − I) with F's
+    columns c₁, c₂ as :func:`face_stretch_into` forms them."""
+    for f in prange(len(faces)):
+        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+        a = b = c = 0.0
+        for k in range(3):
+            d1 = x[i1, k] - x[i0, k]
+            d2 = x[i2, k] - x[i0, k]
+            c1 = d1 * dm[f, 0, 0] + d2 * dm[f, 1, 0]
+            c2 = d1 * dm[f, 0, 1] + d2 * dm[f, 1, 1]
+            a += c1 * c1
+            b += c2 * c2
+            c += c1 * c2
+        e11[f], e22[f], e12[f] = 0.5 * (a - 1.0), 0.5 * (b - 1.0), 0.5 * c

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels import face_stretch_into
+from .kernels import face_stretch_into, green_strain_into
 
 __all__ = [
     "deformation_gradient",
@@ -64,9 +64,11 @@ def _dot(a, b):
 
 
 def green_strain(model, x):
-    """(E₁₁, E₂₂, E₁₂) of each triangle, three arrays of shape (F,)."""
-    c1, c2 = _columns(model, x)
-    return 0.5 * (_dot(c1, c1) - 1.0), 0.5 * (_dot(c2, c2) - 1.0), 0.5 * _dot(c1, c2)
+    """(E₁₁, E₂₂, E₁₂) of each triangle, three arrays of shape (F,) (compiled: the implicit step's
+    compression-softened stiffness asks for it every step)."""
+    out = np.empty((3, model.face_count))
+    green_strain_into(np.ascontiguousarray(x, dtype=float), model.faces, model.face_dm_inv, *out)
+    return out[0], out[1], out[2]
 
 
 def stretch_stiffness(model, e11, e22):
