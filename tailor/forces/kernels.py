@@ -439,20 +439,27 @@ def bending_jacobian_into(model, x, positions, kdata, *, stiffness=None) -> None
     _bending_jacobian(x, model.hinge_vertices, model.hinge_stiffness if stiffness is None else stiffness, positions, kdata)
 
 
+@njit(cache=True, inline="always")
+def _metric(x, faces, dm, f):
+    """(c₁·c₁, c₂·c₂, c₁·c₂): the metric FᵀF of triangle ``f``, F's columns c₁, c₂ = [x₁ − x₀, x₂ − x₀]·Dm⁻¹."""
+    i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+    a = b = c = 0.0
+    for k in range(3):
+        d1 = x[i1, k] - x[i0, k]
+        d2 = x[i2, k] - x[i0, k]
+        c1 = d1 * dm[f, 0, 0] + d2 * dm[f, 1, 0]
+        c2 = d1 * dm[f, 0, 1] + d2 * dm[f, 1, 1]
+        a += c1 * c1
+        b += c2 * c2
+        c += c1 * c2
+    return a, b, c
+
+
 @njit(cache=True, parallel=True)
 def face_stretch_into(x, faces, dm, out):
     """Largest principal stretch of each triangle into ``out`` (F,): √ of FᵀF's larger eigenvalue."""
     for f in prange(len(faces)):
-        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
-        a = b = c = 0.0
-        for k in range(3):
-            d1 = x[i1, k] - x[i0, k]
-            d2 = x[i2, k] - x[i0, k]
-            c1 = d1 * dm[f, 0, 0] + d2 * dm[f, 1, 0]
-            c2 = d1 * dm[f, 0, 1] + d2 * dm[f, 1, 1]
-            a += c1 * c1
-            b += c2 * c2
-            c += c1 * c2
+        a, b, c = _metric(x, faces, dm, f)
         half = 0.5 * (a + b)
         out[f] = math.sqrt(half + math.sqrt(max(half * half - (a * b - c * c), 0.0)))
 
@@ -462,14 +469,5 @@ def green_strain_into(x, faces, dm, e11, e22, e12):
     """Green strain (E₁₁, E₂₂, E₁₂) of each triangle into the three (F,) arrays: ½(FᵀF − I) with F's
     columns c₁, c₂ as :func:`face_stretch_into` forms them."""
     for f in prange(len(faces)):
-        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
-        a = b = c = 0.0
-        for k in range(3):
-            d1 = x[i1, k] - x[i0, k]
-            d2 = x[i2, k] - x[i0, k]
-            c1 = d1 * dm[f, 0, 0] + d2 * dm[f, 1, 0]
-            c2 = d1 * dm[f, 0, 1] + d2 * dm[f, 1, 1]
-            a += c1 * c1
-            b += c2 * c2
-            c += c1 * c2
+        a, b, c = _metric(x, faces, dm, f)
         e11[f], e22[f], e12[f] = 0.5 * (a - 1.0), 0.5 * (b - 1.0), 0.5 * c
