@@ -127,9 +127,9 @@ class Regions:
         patch = patch.ravel()
         self.face_patch = patch
         self.count = int(patch.max()) + 1 if len(patch) else 0
-        self._order = np.argsort(patch, kind="stable")
-        self._starts = np.searchsorted(patch[self._order], np.arange(self.count))
-        self._sorted_faces = np.ascontiguousarray(self.faces[self._order], np.int64)  # grouped by patch
+        order = np.argsort(patch, kind="stable")
+        self._starts = np.searchsorted(patch[order], np.arange(self.count))
+        self._sorted_faces = np.ascontiguousarray(self.faces[order], np.int64)  # grouped by patch
         # each patch's vertices (CSR, grouped by patch): its box is theirs, a sixth of the faces' corners
         corner_keys = unique_ints(np.repeat(patch, 3).astype(np.int64) * max(self.n, 1) + self.faces.ravel())
         self._patch_vertices = corner_keys % max(self.n, 1)
