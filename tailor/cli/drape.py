@@ -187,9 +187,9 @@ def add_drape_command(sub) -> None:
     d.add_argument("--integrator", default="implicit", choices=list(INTEGRATORS))
     d.add_argument("--quality", default=DEFAULT_QUALITY, choices=list(QUALITY),
                    help="speed/accuracy of the implicit step: draft (default: the T-shirt, skirt, trousers and dress "
-                        "walking 50 frames at 2 cm end 9-12 mm from final on average; final lands 3.5-12 mm from "
-                        "itself on a mesh 1%% coarser), normal (1.0-1.6x draft's time, 5.5-12.5 mm) or final "
-                        "(1.6-2.6x draft's time)")
+                        "walking 50 frames at 2 cm, 7-18 s each, end 8-10 mm from final on average; final lands 2-7 mm "
+                        "from itself on a mesh 1%% coarser), normal (1.0-1.3x draft's time, 4.6-7.2 mm) or final "
+                        "(2.1-2.5x draft's time)")
     d.add_argument("--sew-timeout", type=float, default=4.0, metavar="S", help="seconds of sewing before giving up")
     d.add_argument("--self-collision", default="auto", choices=["auto", "on", "off"],
                    help="cloth-cloth contact once the garment is sewn: auto (default) = only where it can "
