@@ -255,7 +255,10 @@ class NearCubes:
 
     def _learn(self, cubes) -> None:
         """Ask FCL about the ``cubes`` (sorted keys) not yet known."""
-        new = cubes[~np.isin(cubes, self._known)]
+        at = np.searchsorted(self._known, cubes)  # both sorted: a binary search, not ``isin``'s sorts
+        known = at < len(self._known)
+        known[known] = self._known[at[known]] == cubes[known]
+        new = cubes[~known]
         if not len(new):
             return
         self.fcl_calls += 1

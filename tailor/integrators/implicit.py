@@ -308,7 +308,10 @@ class ImplicitEuler(IntegratorBase):
         more = predict(model, state, state.x + dt * v1, v1, dt, held.ids)
         if more is None or not len(more.ids):
             return None, None
-        new = ~np.isin(more.ids, held.ids) & ~np.isin(more.ids, let_go) & ~model.vertex_pinned[more.ids]
+        taken = np.array(model.vertex_pinned, bool)  # by a mask: two ``isin`` calls sort all four arrays
+        taken[held.ids] = True
+        taken[let_go] = True
+        new = ~taken[more.ids]
         return (more, new) if new.any() else (None, None)
 
     def _landing(self, model, state, dt, dv, held, let_go, predict):
