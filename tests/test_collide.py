@@ -405,3 +405,19 @@ def test_kept_candidates_keep_every_row_through_moves_and_packing():
         lo, hi, tri = kept.spans()
         for i, t in truth.items():
             assert np.array_equal(tri[lo[i]:hi[i]], t), (rnd, i)
+
+
+def test_body_query_keys_grouped_by_vertex_hold_each_vertexs_triangles_in_vertex_order():
+    """A body query's (point, triangle) pairs become keys ``vertex · F + triangle`` grouped by vertex in
+    the order of the vertices asked about (what :class:`KeptCandidates` and the CSR read), each
+    vertex's triangles ascending: the sorted keys, by a counting pass instead of a sort."""
+    from tailor.collide.memory import grouped_keys
+
+    rng = np.random.default_rng(3)
+    ids = np.sort(rng.choice(5000, 40, replace=False))
+    point, tri = rng.integers(0, 40, 600), rng.integers(0, 900, 600)
+    keys = grouped_keys(point, tri, ids, 900)
+    assert np.array_equal(keys, np.sort(ids[point] * 900 + tri))
+    asked = ids[rng.permutation(40)]  # vertices asked about out of vertex order: grouped in the order asked
+    keys = grouped_keys(point, tri, asked, 900)
+    assert np.array_equal(keys, np.concatenate([np.sort(asked[p] * 900 + tri[point == p]) for p in range(40)]))

@@ -14,7 +14,7 @@ from .closest import nearest_into
 from .contacts import NO_CONTACTS, Contacts
 from .drift import BodyDrift
 from .inside import InsideTest
-from .memory import KeptCandidates, LandingTests, LastResponse, per_vertex, same_positions
+from .memory import KeptCandidates, LandingTests, LastResponse, grouped_keys, per_vertex, same_positions
 
 __all__ = ["BodyCollider", "body_gap", "BODY_SPAN"]
 
@@ -191,9 +191,11 @@ class BodyCollider:
         near, geometry = self._body(frame)
         point, tri = (near.query(points, geometry) if radius is None
                       else clustered_query(points, radius, near.target, geometry=geometry))
-        keys = ids[point] * len(self.faces) + tri
-        keys.sort()  # grouped by vertex is all the CSR needs (a repeated pair would only be tested twice)
-        return keys
+        if len(ids) > 1 and np.any(np.diff(ids) < 0):  # not in vertex order: sorted
+            keys = ids[point] * len(self.faces) + tri
+            keys.sort()
+            return keys
+        return grouped_keys(point, tri, ids, len(self.faces))  # grouped by vertex is all the CSR needs
 
     def nearest(self, x, body_x, frame: int, *, cache: bool = True, rows=None):
         """Signed distance [m] (positive outside), triangle, barycentrics and normal per vertex (of

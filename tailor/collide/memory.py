@@ -8,7 +8,7 @@ from numba import njit
 
 from .drift import BodyDrift
 
-__all__ = ["KeptCandidates", "LandingTests", "LastResponse", "same_positions", "same_optional", "per_vertex"]
+__all__ = ["KeptCandidates", "LandingTests", "LastResponse", "grouped_keys", "same_positions", "same_optional", "per_vertex"]
 
 
 def same_positions(a, b) -> bool:
@@ -86,6 +86,40 @@ class KeptCandidates:
         packed = np.zeros(int(self._room.sum()) + spare, np.int32)
         self._end = _pack_rows(self.slots, self._lo, self.count, self._room, packed)
         self.slots = packed
+
+
+def grouped_keys(point, tri, ids, face_count: int):
+    """Keys ``ids[point] · F + tri`` of (point, triangle) pairs grouped by point in the order of
+    ``ids``, each point's triangles ascending: with ``ids`` sorted, the keys sorted, by one counting
+    pass and a sort of each point's few triangles instead of a sort of them all (a body query's keys,
+    every query)."""
+    point = np.ascontiguousarray(point, np.int64)
+    out = np.empty(len(point), np.int64)
+    _group(point, np.ascontiguousarray(tri, np.int64), np.ascontiguousarray(ids, np.int64), face_count, out)
+    return out
+
+
+@njit(cache=True)
+def _group(point, tri, ids, face_count, out):
+    start = np.zeros(len(ids) + 1, np.int64)
+    for k in range(len(point)):
+        start[point[k] + 1] += 1
+    for i in range(len(ids)):
+        start[i + 1] += start[i]
+    for k in range(len(point)):
+        p = point[k]
+        out[start[p]] = ids[p] * face_count + tri[k]
+        start[p] += 1
+    first = 0
+    for i in range(len(ids)):  # each point's keys (start[i] is now where its group ends) by insertion
+        for k in range(first + 1, start[i]):
+            key = out[k]
+            j = k - 1
+            while j >= first and out[j] > key:
+                out[j + 1] = out[j]
+                j -= 1
+            out[j + 1] = key
+        first = start[i]
 
 
 @njit(cache=True)
