@@ -191,11 +191,10 @@ class BodyCollider:
         near, geometry = self._body(frame)
         point, tri = (near.query(points, geometry) if radius is None
                       else clustered_query(points, radius, near.target, geometry=geometry))
-        if len(ids) > 1 and np.any(np.diff(ids) < 0):  # not in vertex order: sorted
-            keys = ids[point] * len(self.faces) + tri
+        keys = grouped_keys(point, tri, ids, len(self.faces))  # sorted when ``ids`` is: all the CSR needs
+        if len(ids) > 1 and np.any(np.diff(ids) < 0):  # asked out of vertex order: grouped in that order
             keys.sort()
-            return keys
-        return grouped_keys(point, tri, ids, len(self.faces))  # grouped by vertex is all the CSR needs
+        return keys
 
     def nearest(self, x, body_x, frame: int, *, cache: bool = True, rows=None):
         """Signed distance [m] (positive outside), triangle, barycentrics and normal per vertex (of
