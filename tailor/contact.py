@@ -26,7 +26,7 @@ from .constraints import Attachments, HeightHold, LimbWallContact
 from .errors import SimulationError
 
 __all__ = ["ContactPipeline", "ContactLoads", "ContactSettings", "StaticBody", "Attachments", "HeightHold", "LimbWallContact", "BODY_MARGIN",
-           "WIDE_BODY_MARGIN", "body_margin", "check_self_collision"]
+           "body_margin", "check_self_collision"]
 
 BODY_MARGIN = 0.03
 """Body contact query radius [m]: candidates are reused while no cloth vertex moves its budget (half
@@ -35,17 +35,9 @@ judged against the closed surface, and a walking step carries no body point near
 than that (walking limbs move ~1 cm a step)."""
 
 
-WIDE_BODY_MARGIN = 0.04
-"""The body contact query radius [m] a drape widens to once the body moves faster near the cloth than
-:data:`BODY_MARGIN`'s sure radius lets it step (:meth:`~tailor.dress.timeline.Timeline.moving_step`):
-the budget stays, so the sure radius grows from 1.5 to 2.5 cm and walking trousers take 40 % fewer
-steps, each asking about more body triangles (docs/measurements.md, thirty-third day)."""
-
-
-def body_margin(thickness: float, *, wide: bool = False) -> float:
-    """The body contact margin for cloth ``thickness`` [m]: :data:`BODY_MARGIN` (``wide``:
-    :data:`WIDE_BODY_MARGIN`), or twice the thickness."""
-    return max(WIDE_BODY_MARGIN if wide else BODY_MARGIN, 2.0 * thickness)
+def body_margin(thickness: float) -> float:
+    """The body contact margin for cloth ``thickness`` [m]: :data:`BODY_MARGIN`, or twice the thickness."""
+    return max(BODY_MARGIN, 2.0 * thickness)
 
 
 def check_self_collision(mode: str) -> str:
@@ -243,11 +235,6 @@ class ContactPipeline:
         start a new self-collider (:meth:`follow`)."""
         if self._start is not None and len(self._start) == len(x):
             self._start = np.array(x, float)
-
-    def widen_body(self, margin: float) -> None:
-        """The body collider queries within ``margin`` [m] from now on (:meth:`BodyCollider.widen`)."""
-        if self.body is not None:
-            self.body.widen(margin)
 
     def forget(self) -> None:
         """The cloth's topology changed (a cut or a tear): drop everything known per vertex."""

@@ -421,31 +421,3 @@ def test_body_query_keys_grouped_by_vertex_hold_each_vertexs_triangles_in_vertex
     asked = ids[rng.permutation(40)]  # vertices asked about out of vertex order: grouped in the order asked
     keys = grouped_keys(point, tri, asked, 900)
     assert np.array_equal(keys, np.concatenate([np.sort(asked[p] * 900 + tri[point == p]) for p in range(40)]))
-
-
-def test_a_widened_body_collider_keeps_its_budget_and_holds_every_triangle_within_its_wider_sure_radius():
-    """Widening mid-walk (a drape whose body moves too fast near the cloth, Timeline.moving_step) drops
-    what was found within the old margin: from then on every triangle within the new sure radius
-    (the wider margin less the same budget) is a candidate; a narrower margin changes nothing."""
-    from tailor import read_body
-
-    walk = read_body("mannequin-walk")
-    frames, faces = walk.frames[:6], walk.faces
-    rng = np.random.default_rng(3)
-    ids = rng.choice(frames.shape[1], 800, replace=False)
-    offset = rng.uniform(0.003, 0.03, (len(ids), 1))
-    collider = BodyCollider(frames, faces, margin=0.03)
-    budget = collider.budget
-    assert not collider.widen(0.02) and collider.margin == 0.03
-    exact = BodyCollider(frames, faces, margin=0.04 - budget)
-    for frame in range(len(frames)):
-        normals = trimesh.Trimesh(frames[frame], faces, process=False).vertex_normals[ids]
-        x = frames[frame][ids] + offset * normals
-        have = _pairs(*collider.candidates(x, frame))
-        if frame == 2:
-            assert collider.widen(0.04)
-            assert collider.budget == budget and collider.sure == pytest.approx(0.04 - budget)
-            have = _pairs(*collider.candidates(x, frame))
-        if frame >= 2:
-            need = _pairs(*exact.candidates(x, frame, cache=False))
-            assert need <= have, f"frame {frame}: {len(need - have)} pairs within the wider sure radius missing"

@@ -89,20 +89,6 @@ class BodyCollider:
         self._seen = None
         self._tested = None
 
-    def widen(self, margin: float) -> bool:
-        """Query within ``margin`` [m] from now on, keeping the :attr:`budget`: the :attr:`sure` radius
-        grows by as much, so a step may carry the body that much further through the cloth
-        (:meth:`~tailor.dress.timeline.Timeline.moving_step`), for more candidates per vertex. What was
-        found within the old margin is dropped. False (nothing changes) unless ``margin`` is wider."""
-        if not margin > self.margin:
-            return False
-        self.margin = float(margin)
-        self.sure = self.margin - self.budget
-        self._boxes.clear()
-        self._drifts.clear()
-        self.forget()
-        return True
-
     def checkpoint(self) -> tuple:
         """What a step's response changes of what the collider remembers per vertex (the distances and
         sides after the last response, the deepest penetration), for :meth:`restore`. The kept

@@ -139,8 +139,7 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None, sin
         placer = replace(placer, walls=walls, margin=garment.thickness)
         x0 = walls.separate(x0, mesh, garment.thickness)
     collider = BodyCollider(timeline.collider_frames, body.faces, margin=body_margin(garment.thickness))
-    wide = body_margin(garment.thickness, wide=True)
-    timeline.follow_collider(collider.margin, collider.sure, wide=(wide, wide - collider.budget))
+    timeline.follow_collider(collider.margin, collider.sure)
     panel_layer = garment_of_vertex(pattern, np.arange(len(pattern.panels))) if pattern.pieces else None
     contacts = ContactPipeline(collider, timeline, thickness=garment.thickness, friction=garment.friction,
                                self_collision=opts.self_collision, panel_layer=panel_layer)

@@ -20,7 +20,7 @@ from ..tearing import Cut
 
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLE_STEP_PER_RESOLUTION", "SETTLE_RAMP", "settle_step", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION", "FREE_SEW_STEP",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
-           "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "FREEZE_STRETCH", "WIDEN_BELOW", "FREEZE_RINGS", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
+           "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "FREEZE_STRETCH", "FREEZE_RINGS", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
            "TUCK_BELOW", "TUCK_GATHER_TIME", "TUCK_ROW"]
 
 DRAPE_RESOLUTION = 0.02
@@ -88,11 +88,6 @@ seconds (sliding over the shoulders)."""
 
 REST_FRAMES = 2
 """See ``REST_SPEED``."""
-
-WIDEN_BELOW = 0.75
-"""A moving body's collider widens (:data:`~tailor.contact.WIDE_BODY_MARGIN`) once the body near the
-cloth moves so fast that its sure radius would cut a step below this share of the longest step
-(:meth:`~tailor.dress.timeline.Timeline.moving_step`)."""
 
 FREEZE_STRETCH = 1.3
 """An outfit's sewn inner garments are held still while an outer one sews, except round their

@@ -107,8 +107,6 @@ class Dressing:
         self.garment.stiffen_near_pairs(state.x)
         if self.phase.moving:
             dt = self.timeline.moving_step(state, duration)
-            if self.timeline.widened:  # the body near the cloth too fast for the collider's sure radius
-                self.contacts.widen_body(self.timeline.margin)
         else:
             dt = self.garment.sewing.step  # sewing: the plain implicit step, or a stage's longer one
             if self.phase.gravity:

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..collide.bounds import axis_bounds
-from .options import SETTLE_RAMP, TRANSITION_KEYS_PER_S, WIDEN_BELOW, transition_seconds
+from .options import SETTLE_RAMP, TRANSITION_KEYS_PER_S, transition_seconds
 
 __all__ = ["Timeline", "NearBodySpeed"]
 
@@ -116,8 +116,6 @@ class Timeline:
         self._near = None
         self.margin = 0.0
         self.travel = 0.0  # [m] how far a step may carry a body point relative to the cloth (follow_collider)
-        self.wide = None  # (margin, travel) [m] of the collider widened, for a body too fast near the cloth
-        self.widened = False  # whether the steps are those of the widened collider (moving_step)
         self.max_speed = self._max_speed()
 
     @property
@@ -148,17 +146,13 @@ class Timeline:
         """Frame 0 of the motion is at ``t`` [s]."""
         self.motion_start = t
 
-    def follow_collider(self, margin: float, travel: float, wide=None) -> None:
+    def follow_collider(self, margin: float, travel: float) -> None:
         """The body collider's ``margin`` [m] and how far [m] a step may carry the body through the
         cloth (its :attr:`~tailor.collide.body.BodyCollider.sure` radius): the step rule of a moving
-        body uses them; ``wide`` (margin, travel) [m]: those of the collider widened
-        (:meth:`~tailor.collide.body.BodyCollider.widen`), which :meth:`moving_step` may switch to."""
-        self.margin, self.travel, self.wide = margin, travel, wide
-        self._near_body()
-
-    def _near_body(self) -> None:
+        body uses them."""
+        self.margin, self.travel = margin, travel
         if self.moving:
-            self._near = NearBodySpeed(self.body, self.pose if self.keys else None, self.margin, self.transition_s)
+            self._near = NearBodySpeed(self.body, self.pose if self.keys else None, margin, self.transition_s)
 
     def at(self, t: float):
         """Body positions, velocities and collider frame at time ``t`` of the drape."""
@@ -206,22 +200,7 @@ class Timeline:
         span = None if start is None else (state.t - start, state.t - start + duration)
         longest = self.still_step if span is not None else max(self.still_step, self.settle_step)
         fastest = self._near(state.x, state.v, bx, duration, span)
-        if self._widens(fastest, longest):
-            fastest = self._near(state.x, state.v, bx, duration, span)  # within the wider reach
         dt = min(longest, self.travel / fastest) if fastest > 0 else longest
         if span is not None:  # the motion's steps, as the report gives them
             self.steps_used.append(dt)
         return dt
-
-    def _widens(self, fastest: float, longest: float) -> bool:
-        """Whether the collider widens now (once a drape, for good: :attr:`widened`): the body moves
-        so fast near the cloth (``fastest`` [m/s]) that the collider's sure radius would cut the step
-        below :data:`~.options.WIDEN_BELOW` of the ``longest`` [s]. Walking legs in trousers do (from
-        the transition on); the arms and trunk under a T-shirt do not, whose steps the wider query
-        would only make dearer."""
-        if self.wide is None or self.widened or not fastest > 0 or self.travel / fastest >= WIDEN_BELOW * longest:
-            return False
-        self.widened = True
-        self.margin, self.travel = self.wide
-        self._near_body()
-        return True
