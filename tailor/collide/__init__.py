@@ -16,7 +16,8 @@ a margin and reuse the candidates while nothing has moved further than it.
 * :mod:`.contacts` — :class:`Contacts`, what a response hands to the next implicit step.
 """
 
-from .body import BodyCollider, body_gap
+from .body import BodyCollider
+from .gap import body_gap
 from .broad import TriangleBoxes, bvh_object, clustered_query, sphere_query
 from .cloth import SELF_COLLISION_MODES, Layers, SelfCollider
 from .margins import SELF_MARGIN, self_margin

@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import math
-from functools import partial
-from itertools import chain
-
 import numpy as np
 
 from ..errors import SimulationUnstable
@@ -16,7 +12,7 @@ from .drift import BodyDrift
 from .inside import InsideTest
 from .memory import KeptCandidates, LandingTests, LastResponse, grouped_keys, per_vertex, same_positions
 
-__all__ = ["BodyCollider", "body_gap", "BODY_SPAN"]
+__all__ = ["BodyCollider", "BODY_SPAN"]
 
 BODY_SPAN = 16
 """Body frames one FCL broad phase of the body serves (:meth:`BodyCollider._body`): a walk builds its
@@ -427,35 +423,3 @@ def _recent(store: dict, key, keep: int, make):
             store.pop(next(iter(store)))
         store[key] = make()
     return store[key]
-
-
-def body_gap(x, body_x, body_faces):
-    """Signed distance [m] from each point to the body surface (negative inside) and the body's
-    outward normal at its nearest point (:func:`~tailor.collide.closest.nearest_into`), exact at any
-    distance.
-
-    The body vertex nearest a point is on the surface, so the surface is no farther than it; every
-    triangle that could hold a nearer point has its centroid within that bound plus the largest
-    centroid-to-corner distance. Those are each point's candidates (a k-d tree of centroids): a
-    measurement asked once per frame, for which FCL's broad phase, a Python object per pair, is the
-    slower way (docs/measurements.md, seventeenth day)."""
-    from scipy.spatial import cKDTree
-
-    x = np.ascontiguousarray(x, float)
-    body_x = np.ascontiguousarray(body_x, float)
-    faces = np.ascontiguousarray(body_faces, np.int64)
-    n = len(x)
-    dist, tri, bary, normal = np.full(n, np.inf), np.full(n, -1, np.int64), np.zeros((n, 3)), np.zeros((n, 3))
-    if not n:
-        return dist, normal
-    tree = partial(cKDTree, balanced_tree=False, compact_nodes=False)  # built for one query: the quicker build
-    bound = tree(body_x).query(x)[0]
-    a, b, c = body_x[faces[:, 0]], body_x[faces[:, 1]], body_x[faces[:, 2]]
-    centre = (a + b + c) / 3.0
-    reach = math.sqrt(max(float(np.einsum("ij,ij->i", p - centre, p - centre).max()) for p in (a, b, c)))
-    lists = tree(centre).query_ball_point(x, bound * (1.0 + 1e-9) + reach + 1e-12, return_sorted=True)
-    count = np.fromiter(map(len, lists), np.int64, n)
-    hi = np.cumsum(count)
-    candidates = np.fromiter(chain.from_iterable(lists), np.int64, int(hi[-1]))
-    nearest_into(x, hi - count, hi, candidates, body_x, faces, dist, tri, bary, normal, np.arange(n, dtype=np.int64))
-    return dist, normal
