@@ -25,7 +25,7 @@ from .geometry import vertex_normals
 from .limbwalls import LimbWalls, limb_walls, no_walls  # re-exported: placement's other half
 from .pattern import LandmarkPlacement, TransformPlacement
 
-__all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
+__all__ = ["crossing_later", "place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
 
 SLOPE = 0.1
 """Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
@@ -271,7 +271,8 @@ class _Outside:
         return out
 
 
-def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | None = None, x=None) -> np.ndarray:
+def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | None = None, x=None,
+                 again=None) -> np.ndarray:
     """Initial 3D positions [m], shape (N, 3), of every mesh vertex from its panel's placement.
 
     Parameters
@@ -290,6 +291,9 @@ def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | N
         garment's placement is wider than its sewn shape, and an outer panel rolled round it
         would start a hand's breadth off the body, its seams too far apart to close). Every other
         vertex keeps its position in ``x``.
+    again : list of int, optional
+        Place only these panels again (in order), each clear of the cloth placed before it as it lies
+        at ``x`` (:class:`_Outside`; the panels :func:`crossing_later` finds); the others keep ``x``.
 
     Without ``garment``, an outfit's garments are placed innermost first, each garment's landmark
     placements at their clearance plus the room of the garments inside it
@@ -310,16 +314,39 @@ def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | N
         body_axis = np.mean([np.asarray(lm.center)[:2] for lm in landmarks.values()], axis=0)
     pieces = [pattern.piece_of(pi) for pi in range(len(pattern.panels))]
     counts = _panels_round(pattern, pieces)
+
+    def place(pi, test):
+        ids = mesh.panel_vertices(pi)
+        extra = pieces[pi].clearance if garment is None else 0.0
+        out[ids] = _place_panel(pattern, pi, mesh.uv[ids], landmarks, test, counts[pi], body_axis, extra)
+
+    if again is not None:
+        out = np.array(x, float)
+        for pi in again:
+            place(pi, _Outside(inside, out, mesh, pi, LAYER_GAP))
+        return out
     first = None
     for pi in panels:
         if pieces[pi].first and pieces[pi].first != first and inside is not None:  # an outer garment: clear of the inner ones too
             first = pieces[pi].first
             clear = _Outside(inside, out, mesh, first, LAYER_GAP)
-        extra = pieces[pi].clearance if garment is None else 0.0
-        ids = mesh.panel_vertices(pi)
-        out[ids] = _place_panel(pattern, pi, mesh.uv[ids], landmarks, clear if first else inside, counts[pi],
-                                body_axis, extra)
+        place(pi, clear if first else inside)
     return out
+
+
+def crossing_later(x, mesh) -> list:
+    """The later-placed panel of each pair of panels placed through each other at ``x``, in order.
+
+    Panels rolled round landmarks at different heights can meet there: on MakeHuman's man, whose
+    waist is 19 cm under his hips, the front legs' tops (rolled round the thighs and widened to clear
+    the hips) came in through each other and through the waistband at the centre front, and sewing
+    them stretched a waistband triangle tenfold. :func:`place_panels` (``again``) places each such
+    panel again, clear of the cloth placed before it, as an outer garment's are."""
+    from .collide import edge_crossings
+
+    crossings = edge_crossings(x, mesh.faces)
+    a, b = mesh.vertex_panel[crossings[:, 0]], mesh.face_panel[crossings[:, 2]]
+    return sorted(set(np.maximum(a, b)[a != b].tolist()))
 
 
 def _panels_round(pattern, pieces) -> list:

