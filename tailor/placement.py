@@ -304,7 +304,9 @@ def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | N
     PatternError
         A panel without a placement, or a landmark placement without a body.
     """
-    if garment is None:
+    if again is not None:
+        out, panels = np.array(x, float), again
+    elif garment is None:
         out, panels = np.zeros((mesh.vertex_count, 3)), range(len(pattern.panels))
     else:
         piece = pattern.pieces[garment]
@@ -321,7 +323,6 @@ def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | N
         out[ids] = _place_panel(pattern, pi, mesh.uv[ids], landmarks, test, counts[pi], body_axis, extra)
 
     if again is not None:
-        out = np.array(x, float)
         for pi in again:
             place(pi, _Outside(inside, out, mesh, pi, LAYER_GAP))
         return out
