@@ -25,7 +25,7 @@ from .geometry import vertex_normals
 from .limbwalls import LimbWalls, limb_walls, no_walls  # re-exported: placement's other half
 from .pattern import LandmarkPlacement, TransformPlacement
 
-__all__ = ["crossing_later", "place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
+__all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
 
 SLOPE = 0.1
 """Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
@@ -293,7 +293,8 @@ def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | N
         vertex keeps its position in ``x``.
     again : list of int, optional
         Place only these panels again (in order), each clear of the cloth placed before it as it lies
-        at ``x`` (:class:`_Outside`; the panels :func:`crossing_later` finds); the others keep ``x``.
+        at ``x`` (:class:`_Outside`; panels placed through each other,
+        :meth:`tailor.dress.Placer.uncrossed`); the others keep ``x``.
 
     Without ``garment``, an outfit's garments are placed innermost first, each garment's landmark
     placements at their clearance plus the room of the garments inside it
@@ -333,21 +334,6 @@ def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | N
             clear = _Outside(inside, out, mesh, first, LAYER_GAP)
         place(pi, clear if first else inside)
     return out
-
-
-def crossing_later(x, mesh) -> list:
-    """The later-placed panel of each pair of panels placed through each other at ``x``, in order.
-
-    Panels rolled round landmarks at different heights can meet there: on MakeHuman's man, whose
-    waist is 19 cm under his hips, the front legs' tops (rolled round the thighs and widened to clear
-    the hips) came in through each other and through the waistband at the centre front, and sewing
-    them stretched a waistband triangle tenfold. :func:`place_panels` (``again``) places each such
-    panel again, clear of the cloth placed before it, as an outer garment's are."""
-    from .collide import edge_crossings
-
-    crossings = edge_crossings(x, mesh.faces)
-    a, b = mesh.vertex_panel[crossings[:, 0]], mesh.face_panel[crossings[:, 2]]
-    return sorted(set(np.maximum(a, b)[a != b].tolist()))
 
 
 def _panels_round(pattern, pieces) -> list:

@@ -325,7 +325,9 @@ def test_trouser_legs_are_sewn_without_crossing_each_other(mannequin):
         assert (sign * x[low, 0] > 0).all()  # below the crotch, each leg on its own side
     crossed = drape(pattern, mannequin, frames=1, resolution=0.04, settle=0.2, limb_walls=False)
     assert crossed.report.crossings_per_frame[0] > 10
-    assert crossed.report.placement_crossings > 10  # the rolled legs overlap: placement says so
+    # the rolled legs overlap; placement sets the later leg clear of the other (Placer.uncrossed),
+    # yet sewing without the walls draws them through each other
+    assert crossed.report.placement_crossings == 0
 
 
 @pytest.mark.slow

@@ -25,7 +25,7 @@ from ..measure import measure_body
 from ..mesh import discretise
 from ..outfit import ease_layers, garment_of_vertex, outfit
 from ..limbwalls import limb_walls
-from ..placement import crossing_later, place_panels
+from ..placement import place_panels
 from ..sim import max_stretch, quality as sim_quality
 from ..sizing import check_loops
 from .garment import Garment, layer_spacing
@@ -168,9 +168,16 @@ class Placer:
 
     def uncrossed(self, x) -> np.ndarray:
         """``x`` with the later of each two panels still placed through each other (after the limb
-        walls parted the legs) placed again clear of the cloth before it
-        (:func:`~tailor.placement.crossing_later`); ``x`` itself when none cross."""
-        again = crossing_later(x, self.mesh)
+        walls parted the legs) placed again clear of the cloth placed before it, as an outer
+        garment's panels are (``place_panels(…, again=…)``); ``x`` itself when none cross.
+
+        Panels rolled round landmarks at different heights can meet there: on MakeHuman's man, whose
+        waist is 19 cm under his hips, the front legs' tops (rolled round the thighs and widened to
+        clear the hips) came in through each other and through the waistband at the centre front,
+        and sewing them stretched a waistband triangle tenfold."""
+        crossings = edge_crossings(x, self.mesh.faces)
+        a, b = self.mesh.vertex_panel[crossings[:, 0]], self.mesh.face_panel[crossings[:, 2]]
+        again = sorted(set(np.maximum(a, b)[a != b].tolist()))
         if not again:
             return x
         out = place_panels(self.pattern, self.mesh, self.landmarks, inside=self.inside, x=x, again=again)
