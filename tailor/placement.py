@@ -324,7 +324,7 @@ def place_panels(pattern, mesh, landmarks=None, inside=None, *, garment: int | N
         out[ids] = _place_panel(pattern, pi, mesh.uv[ids], landmarks, test, counts[pi], body_axis, extra)
 
     if again is not None:
-        for pi in again:
+        for pi in panels:
             place(pi, _Outside(inside, out, mesh, pi, LAYER_GAP))
         return out
     first = None
