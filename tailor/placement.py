@@ -2,7 +2,9 @@
 
 Two kinds of placement come from the pattern:
 
-* an explicit rigid transform (GarmentCode's ``translation``/``rotation``), applied as it is;
+* an explicit rigid transform (GarmentCode's ``translation``/``rotation``), drafted for GarmentCode's
+  neutral body: applied as it is, then moved with the body part the panel's label names onto the
+  body being dressed (:mod:`tailor.retarget`);
 * a body-relative :class:`~tailor.pattern.LandmarkPlacement`: the panel is rolled around the
   named landmark's cross-section (an ellipse for the trunk, a circle for a limb) at ``clearance``
   from the body, its anchor at the landmark's ``angle``, its +y along the landmark's axis and its
@@ -24,6 +26,7 @@ from .errors import PatternError
 from .geometry import vertex_normals
 from .limbwalls import LimbWalls, limb_walls, no_walls  # re-exported: placement's other half
 from .pattern import LandmarkPlacement, TransformPlacement
+from .retarget import BodyRetarget
 
 __all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
 
@@ -353,8 +356,9 @@ def _place_panel(pattern, pi: int, uv, landmarks, inside, count: int, body_axis,
     pl = panel.placement
     if pl is None:
         pattern.fail(panel.where(), "the panel has no placement (give 'placement' or 'translation'/'rotation')")
-    if isinstance(pl, TransformPlacement):
-        return pl.apply(uv) if inside is None else _clear_rigid(pl.apply(uv), pl, inside, body_axis, clearance=0.01 + extra)
+    if isinstance(pl, TransformPlacement):  # drafted for GarmentCode's neutral body: moved onto this one
+        x = pl.apply(uv) if not landmarks else BodyRetarget(landmarks).move(panel.label, pl.apply(uv))
+        return x if inside is None else _clear_rigid(x, pl, inside, body_axis, clearance=0.01 + extra)
     if landmarks is None:
         raise PatternError(f"{pattern.source}: {panel.where()}.placement: a landmark placement needs a body")
     if extra:

@@ -12,7 +12,7 @@ LAYERS = {
     "errors": 0, "units": 0, "landmarks": 0,
     "geometry": 1, "curves": 1, "topology": 1, "hanging": 1, "sections": 1,
     "pattern": 2, "fabric": 2, "body": 2, "orient": 2,
-    "mesh": 3, "placement": 3, "limbwalls": 3, "mannequin": 3, "measure": 3, "arms": 3,
+    "mesh": 3, "placement": 3, "retarget": 3, "limbwalls": 3, "mannequin": 3, "measure": 3, "arms": 3,
     "params": 4, "model": 4, "sizing": 4,
     "forces": 5, "collide": 5, "seams": 5, "outfit": 5,
     "integrators": 6, "contact": 6, "constraints": 6,
