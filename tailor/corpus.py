@@ -364,7 +364,7 @@ def misplaced(garment: str, x, marks) -> str:
     """Why a worn garment is not where it belongs ('' when it is): a skirt's or trousers' top within
     8 cm of the waist, a top round the bust and below the neck."""
     top = float(np.max(x[:, 2]))
-    if garment in ("skirt", "trousers", "circle_skirt"):
+    if any(word in garment for word in ("skirt", "trousers", "pants")):  # ours and GarmentCode's bottoms
         off = top - marks["waist"].height
         return "" if abs(off) < 0.08 else f"its top is {100 * off:+.0f} cm from the waist"
     bust, neck = marks["bust"].height, marks["neck"].height
