@@ -1,8 +1,8 @@
 """Body × garment over the body corpus: landmarks found, wall time, penetration, crossings, the
 most stretched triangle, one piece, garment where it belongs. Prints a Markdown table (the issue
 note's); ``--quick`` drapes at 6 cm. A garment is a pattern of ``panels/`` or, with
-``--garmentcode DIR``, one of GarmentCode's (``DIR/NAME_specification.json``, placed by its rigid
-transforms: the T-shirt, pants, skirts and dress on MakeHuman's bodies, docs/measurements.md).
+``--garmentcode DIR``, GarmentCode's (``DIR/NAME_specification.json``, placed by its rigid
+transforms: its T-shirt, pants, skirts and dress on MakeHuman's bodies, docs/measurements.md).
 
     python benchmarks/body_corpus.py [--quick] [--resolution CM] [--frames N] [--garments NAME ...]
                                      [--garmentcode ../shared/garmentcode] [--makehuman]
@@ -27,9 +27,8 @@ PANELS = Path(__file__).resolve().parents[1] / "panels"
 
 
 def pattern_path(garment: str, garmentcode: Path | None) -> Path:
-    """``panels/GARMENT.json``, or GarmentCode's ``GARMENT_specification.json`` in ``garmentcode``."""
-    ours = PANELS / f"{garment}.json"
-    return ours if ours.exists() or garmentcode is None else garmentcode / f"{garment}_specification.json"
+    """GarmentCode's ``GARMENT_specification.json`` in ``garmentcode`` if given, else ``panels/GARMENT.json``."""
+    return PANELS / f"{garment}.json" if garmentcode is None else garmentcode / f"{garment}_specification.json"
 
 
 def run(body, garment, resolution, frames, garmentcode=None):
