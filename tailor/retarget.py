@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BodyRetarget", "NEUTRAL", "MIN_MOVE"]
+__all__ = ["BodyRetarget", "NEUTRAL", "MIN_MOVE", "body_part"]
 
 NEUTRAL = {
     "crotch": (0.0001, 0.0018, 0.775), "hips": (0.0, 0.0085, 0.835), "waist": (0.0, -0.0046, 1.1),
@@ -55,6 +55,17 @@ MIN_MOVE = 0.01
 ONE_SIDE = 0.9
 """Share of a ``leg`` panel's points on one side of the body's mid-plane for it to dress that leg
 alone (a trouser leg); less, and it dresses both (a skirt): moved with the trunk."""
+
+
+def body_part(label: str, x) -> tuple[str | None, str]:
+    """(part, side) a rigidly placed panel labelled ``label`` dresses, placed at ``x`` (n, 3) [m]:
+    part ``"arm"``, ``"leg"`` (one side of the body only), ``"trunk"`` (``body``, or ``leg`` across
+    both legs: a skirt) or None (any other label); side ``"left"`` or ``"right"`` of its points' mean."""
+    part = (label or "").strip().lower()
+    side = "left" if len(x) and float(np.mean(x[:, 0])) > 0.0 else "right"
+    if part == "leg" and np.mean(np.sign(x[:, 0]) == (1.0 if side == "left" else -1.0)) < ONE_SIDE:
+        part = "body"  # across both legs
+    return {"arm": "arm", "leg": "leg", "body": "trunk"}.get(part), side
 
 
 def _rotation(a, b) -> np.ndarray:
@@ -90,13 +101,10 @@ class BodyRetarget:
         """Points ``x`` (n, 3) [m] of one panel labelled ``label``, moved onto the body (or ``x``
         itself, where the label names no part, the part is missing or the move is under :data:`MIN_MOVE`)."""
         x = np.asarray(x, float)
-        part = (label or "").strip().lower()
-        if not len(x) or part not in ("arm", "leg", "body"):
+        part, side = body_part(label, x)
+        if not len(x) or part is None:
             return x
-        side = "left" if x[:, 0].mean() > 0.0 else "right"
-        if part == "leg" and np.mean(np.sign(x[:, 0]) == (1.0 if side == "left" else -1.0)) < ONE_SIDE:
-            part = "body"  # across both legs
-        moved = {"arm": self._arm, "leg": self._leg, "body": self._trunk}[part](x, side)
+        moved = {"arm": self._arm, "leg": self._leg, "trunk": self._trunk}[part](x, side)
         if moved is None or np.sqrt(np.einsum("ij,ij->i", moved - x, moved - x).max()) < MIN_MOVE:
             return x
         return moved
