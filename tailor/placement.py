@@ -16,6 +16,7 @@ Two kinds of placement come from the pattern:
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import replace
 
@@ -29,6 +30,8 @@ from .pattern import LandmarkPlacement, TransformPlacement
 from .retarget import BodyRetarget
 
 __all__ = ["place_panels", "limb_walls", "LimbWalls", "no_walls", "SLOPE", "LAYER_GAP"]
+
+log = logging.getLogger(__name__)
 
 SLOPE = 0.1
 """Largest change of a rolled panel's radius, and of its points' position around it, per unit height."""
@@ -357,7 +360,11 @@ def _place_panel(pattern, pi: int, uv, landmarks, inside, count: int, body_axis,
     if pl is None:
         pattern.fail(panel.where(), "the panel has no placement (give 'placement' or 'translation'/'rotation')")
     if isinstance(pl, TransformPlacement):  # drafted for GarmentCode's neutral body: moved onto this one
-        x = pl.apply(uv) if not landmarks else BodyRetarget(landmarks).move(panel.label, pl.apply(uv))
+        drafted = pl.apply(uv)
+        x = drafted if not landmarks else BodyRetarget(landmarks).move(panel.label, drafted)
+        if x is not drafted:
+            log.info("%s: panel %s moved with the body up to %.1f cm from where it was drafted", pattern.source,
+                     panel.name, 100 * float(np.sqrt(np.einsum("ij,ij->i", x - drafted, x - drafted).max())))
         return x if inside is None else _clear_rigid(x, pl, inside, body_axis, clearance=0.01 + extra)
     if landmarks is None:
         raise PatternError(f"{pattern.source}: {panel.where()}.placement: a landmark placement needs a body")
