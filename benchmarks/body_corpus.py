@@ -51,12 +51,12 @@ def run(body, garment, resolution, frames, garmentcode=None):
 
 
 def corpus(quick: bool, makehuman_only: bool = False):
+    people = makehuman_bodies(None if not quick else ["woman", "man", "girl-child", "heavy-woman"])
     if makehuman_only:
-        return makehuman_bodies(None if not quick else ["woman", "man", "girl-child", "heavy-woman"])
+        return people
     bodies = mannequin_variants(["child-105", "bmi-40", "t-pose", "arms-60", "thighs-touching", "man"])
     bodies += perturbations(mannequin_variants(["arms-20"])[0], ["dense-fingers", "turned-37", "mm"])
-    bodies += makehuman_bodies(None if not quick else ["woman", "man", "girl-child", "heavy-woman"])
-    return bodies
+    return bodies + people
 
 
 def main():

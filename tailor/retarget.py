@@ -34,9 +34,7 @@ import numpy as np
 __all__ = ["BodyRetarget", "NEUTRAL", "MIN_MOVE", "body_part"]
 
 NEUTRAL = {
-    "crotch": (0.0001, 0.0018, 0.775), "hips": (0.0, 0.0085, 0.835), "waist": (0.0, -0.0046, 1.1),
-    "underbust": (0.0001, -0.0071, 1.155), "bust": (0.0, -0.0105, 1.21), "armpits": (-0.0001, -0.0028, 1.265),
-    "shoulders": (-0.0001, 0.0079, 1.455), "neck": (0.0001, 0.0036, 1.495),
+    "crotch": (0.0001, 0.0018, 0.775), "shoulders": (-0.0001, 0.0079, 1.455),
     "left_thigh": (0.1004, -0.0002, 0.74), "left_knee": (0.0956, 0.0017, 0.445),
     "right_thigh": (-0.1003, -0.0002, 0.74), "right_knee": (-0.0954, 0.0017, 0.445),
     "left_upper_arm": ((0.299, 0.0079, 1.2288), (-0.7076, 0.0013, 0.7066)),
@@ -101,8 +99,10 @@ class BodyRetarget:
         """Points ``x`` (n, 3) [m] of one panel labelled ``label``, moved onto the body (or ``x``
         itself, where the label names no part, the part is missing or the move is under :data:`MIN_MOVE`)."""
         x = np.asarray(x, float)
+        if not len(x):
+            return x
         part, side = body_part(label, x)
-        if not len(x) or part is None:
+        if part is None:
             return x
         moved = {"arm": self._arm, "leg": self._leg, "trunk": self._trunk}[part](x, side)
         if moved is None or np.sqrt(np.einsum("ij,ij->i", moved - x, moved - x).max()) < MIN_MOVE:
