@@ -147,7 +147,7 @@ class Dressing:
         weld, garment, edge = self._layers
         loose = g.untucked()
         loose = None if loose is None else loose[weld]  # the frames' (mesh) numbering
-        return int(out_of_order(x, garment, body_x, self.timeline.body.faces, loose=loose, edge=edge).sum())
+        return int(out_of_order(x, garment, body_x, self.timeline.body.faces, loose=loose, edge=edge, faces=g.mesh.faces).sum())
 
     def tell(self, done: int, total: int, state) -> None:
         if self.progress is not None:
