@@ -13,8 +13,8 @@ from tailor.body import Body
 from tailor.cli import main
 from tailor.dress import DrapeOptions, drape, prepare
 from tailor.dress.options import REST_FRAMES, REST_SPEED, SETTLE_RAMP, TRANSITION_SPEED, settle_step
-from tailor.dress.phases import animate, rms_speed, settle, sew, transition
-from tailor.errors import SimulationError
+from tailor.dress.phases import _sew_frame, animate, rms_speed, settle, sew, transition
+from tailor.errors import SimulationError, SimulationUnstable
 from tailor.integrators import INTEGRATORS
 from tailor.tearing import Cut
 
@@ -55,6 +55,31 @@ def sewn(skirt_dressing):
 def settled(skirt_dressing, sewn):
     pattern, (d, _, _) = skirt_dressing
     return sewn[0].x.copy(), settle(d, sewn[0])
+
+
+def test_an_instability_while_seams_have_stopped_closing_names_the_widest_of_them(mannequin, monkeypatch):
+    """A garment too small for the body stalls with seams open and is torn by their pull: the error
+    keeps the instability's own words and adds the widest stalled stitch and the likely cause;
+    with no pair stalled it is the instability's alone."""
+    d, _, x0 = prepare(read_pattern(PANELS / "skirt.json"), mannequin, DrapeOptions(resolution=0.08))
+    state = d.garment.model.state(x0)
+
+    def unstable(*args, **kwargs):
+        raise SimulationUnstable("simulation unstable at t = 1.0 s: a triangle is stretched 10x")
+
+    monkeypatch.setattr(d, "advance", unstable)
+    with pytest.raises(SimulationUnstable) as plain:
+        _sew_frame(d, state)
+    assert str(plain.value) == "simulation unstable at t = 1.0 s: a triangle is stretched 10x"
+    sewing = d.garment.sewing
+    sewing.stalled[:3] = True
+    with pytest.raises(SimulationUnstable) as told:
+        _sew_frame(d, state)
+    message = str(told.value)
+    assert message.startswith("simulation unstable at t = 1.0 s") and "\n" not in message
+    assert "skirt.json: by then 3 seam vertex pairs had stopped closing" in message and "too small for this body" in message
+    widest = int(np.argmax(sewing.gaps(d.garment.frame(state))[:3]))
+    assert f"pattern.stitches[{d.garment.pattern.seams[sewing.seam[widest]].index}]" in message
 
 
 def test_sewing_alone_closes_every_seam_and_welds(skirt_dressing, sewn):
