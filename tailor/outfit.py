@@ -43,6 +43,7 @@ from dataclasses import replace
 import numpy as np
 
 from .errors import PatternError
+from .geometry import vertex_normals
 from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSide, validate_pattern
 from .placement import LAYER_GAP
 from .sizing import loop_girth, pattern_loops, scaled_panel
@@ -211,6 +212,7 @@ def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02, loose=N
     from .collide import body_gap
 
     x = np.asarray(x, float)
+    faces = None if faces is None else np.asarray(faces)
     count = int(garment.max(initial=0)) + 1
     near = []  # (i, j, outer vertices within reach of garment i, their nearest vertex of garment i)
     for i in range(count):
@@ -235,7 +237,7 @@ def out_of_order(x, garment, body_x, body_faces, *, reach: float = 0.02, loose=N
         same_side = np.einsum("ij,ij->i", normal[outer], normal[nearest]) > 0.0
         inside = outer[(gap[outer] < gap[nearest]) & same_side]
         if faces is not None and len(inside):
-            below = np.asarray(faces)[garment[np.asarray(faces)[:, 0]] == i]
+            below = faces[garment[faces[:, 0]] == i]
             inside = inside[_under_surface(x, inside, below, _outward(x, below, nearest, normal[nearest]))]
         out[i, j] = len(inside)
     return out
@@ -247,12 +249,7 @@ def _outward(x, faces, ids, body_normal) -> float:
     against the body's outward normals there (``body_normal``). One sign for the whole garment: a
     welded garment is wound consistently, and the body's normal under one vertex is a poor guide in a
     crease (under a buttock the body faces down, the trousers' cloth spanning the fold faces back)."""
-    e1, e2 = x[faces[:, 1]] - x[faces[:, 0]], x[faces[:, 2]] - x[faces[:, 0]]
-    face_normal = np.cross(e1, e2)
-    normal = np.zeros_like(x)
-    for k in range(3):
-        np.add.at(normal, faces[:, k], face_normal)
-    return 1.0 if np.einsum("ij,ij->", normal[ids], body_normal) >= 0.0 else -1.0
+    return 1.0 if np.einsum("ij,ij->", vertex_normals(x, faces)[ids], body_normal) >= 0.0 else -1.0
 
 
 def _under_surface(x, ids, faces, outward: float) -> np.ndarray:
