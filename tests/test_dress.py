@@ -13,7 +13,7 @@ from tailor.body import Body
 from tailor.cli import main
 from tailor.dress import DrapeOptions, drape, prepare
 from tailor.dress.options import REST_FRAMES, REST_SPEED, SETTLE_RAMP, TRANSITION_SPEED, settle_step
-from tailor.dress.phases import _sew_frame, animate, rms_speed, settle, sew, transition
+from tailor.dress.phases import _open_seams, _sew_frame, animate, rms_speed, settle, sew, transition
 from tailor.errors import SimulationError, SimulationUnstable
 from tailor.integrators import INTEGRATORS
 from tailor.tearing import Cut
@@ -80,6 +80,20 @@ def test_an_instability_while_seams_have_stopped_closing_names_the_widest_of_the
     assert "skirt.json: by then 3 seam vertex pairs had stopped closing" in message and "too small for this body" in message
     widest = int(np.argmax(sewing.gaps(d.garment.frame(state))[:3]))
     assert f"pattern.stitches[{d.garment.pattern.seams[sewing.seam[widest]].index}]" in message
+
+
+def test_a_sewing_time_out_says_whether_more_time_would_help(mannequin):
+    """The time-out names the widest open stitch; if that pair had stopped closing, more time will
+    not close it and the message says the garment may be too small instead of asking for more."""
+    d, _, x0 = prepare(read_pattern(PANELS / "skirt.json"), mannequin, DrapeOptions(resolution=0.08))
+    state = d.garment.model.state(x0)
+    sewing = d.garment.sewing
+    message = _open_seams(d.garment, state, 4.0)
+    assert "still open after 4 s of sewing" in message and "allow more time (--sew-timeout)" in message
+    sewing.stalled[int(np.argmax(sewing.gaps(d.garment.frame(state))))] = True
+    message = _open_seams(d.garment, state, 4.0)
+    assert "they had stopped closing: the garment may be too small for this body" in message
+    assert "--sew-timeout" not in message and "\n" not in message
 
 
 def test_sewing_alone_closes_every_seam_and_welds(skirt_dressing, sewn):
