@@ -227,7 +227,7 @@ class BodyCollider:
             tri[out], dist[out] = -1, np.inf
         return dist, tri, bary, normal
 
-    def rescue(self, model, state, body_x, body_v, frame: int, *, thickness, reach: float = 0.15) -> int:
+    def rescue(self, model, state, body_x, body_v, frame: int, *, thickness, reach: float = 0.15, keep=None) -> int:
         """Return cloth vertices trapped inside the body to its surface; how many were moved.
 
         :meth:`respond` trusts only contacts within :attr:`sure`, or vertices it saw cross,
@@ -236,10 +236,14 @@ class BodyCollider:
         there. Here every vertex not surely outside (:meth:`_surely_outside`) is tested against the
         closed surface (:func:`points_inside`);
         those inside, and confirmed by the closest triangle within ``reach`` facing away, are
-        put ``thickness`` outside it at the body's velocity (inelastic, as Eq. 9–10).
+        put ``thickness`` outside it at the body's velocity (inelastic, as Eq. 9–10). ``keep(ids, out)``,
+        optional, says which of those moves to make ((K,) bool); the others stay inside for now.
         """
         ids, tri, bary, out = self.push_out(state.x, body_x, frame, clearance=thickness, reach=reach,
                                             skip=model.vertex_pinned | self._surely_outside(state.x, body_x))
+        if keep is not None and len(ids):
+            ok = keep(ids, out)
+            ids, tri, bary, out = ids[ok], tri[ok], bary[ok], out[ok]
         if not len(ids):
             return 0
         state.x[ids] = out

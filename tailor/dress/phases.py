@@ -99,8 +99,9 @@ class Dressing:
         self.integrator.configure(SolverSettings(phase.tolerance or self.quality.tolerance, phase.max_stretch_change, wind))
         self.contacts.configure(phase.contact)
         self.constrain()
-        self.stepper.configure(forces=self.garment.forces(wind),
-                               guard=Guard(max_stretch=phase.max_stretch or self.motion_limit))
+        guard = Guard(max_stretch=phase.max_stretch or self.motion_limit)
+        self.stepper.configure(forces=self.garment.forces(wind), guard=guard)
+        self.contacts.limit_rescues(guard.max_stretch)
 
     def advance(self, state, duration: float, *, rescue: bool = True):
         """Simulate ``duration`` s on the current model (then free vertices trapped in the body)."""
