@@ -64,7 +64,7 @@ from .layers import Layers
 from .open_seams import OpenSeams
 from .margins import MarginSchedule, self_margin
 from .still import StillVertices
-from .sweep import part_boxes, sweep_parts, union_edge_edge, union_vertex_triangle
+from .sweep import part_sweeps, sweep_parts, union_edge_edge, union_vertex_triangle
 from .regions import PATCH_EDGES, PATCH_MIN, Regions
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "Layers"]
@@ -233,7 +233,7 @@ class SelfCollider:
             self.stats["queries"] += 1
         self._pairs = pairs
         parts = 1 if moving is not None or rxp is None else sweep_parts(step, self._mean_edge)
-        boxes = [(lo, hi, ends, motion)] if parts == 1 else [(a, b, None, None) for a, b in part_boxes(rxp, rx, parts)]
+        boxes = [(lo, hi, ends, motion)] if parts == 1 else list(part_sweeps(rxp, rx, parts))
         self._find(rx, boxes, faces, dirty)
         self.stats["query_s"] += time.perf_counter() - t0
 
@@ -265,8 +265,8 @@ class SelfCollider:
     def _find(self, x, boxes, faces, dirty):
         """The candidates among ``faces`` and their vertices at ``x``, from ``boxes``: (lo, hi) round each
         vertex over the step, or each part of it (:mod:`.sweep`), with (ends, motion) where the step's
-        straight-line motion ends and that motion, (N, 3) each, for the exact test of the primitives
-        themselves (None, None: the boxes only); all of them, or (``dirty`` (N,) bool, the step whole)
+        (or the part's) straight-line motion ends and that motion, (N, 3) each, for the exact test of
+        the primitives themselves; all of them, or (``dirty`` (N,) bool, the step whole)
         the pairs touching a dirty vertex added to the kept ones that touch none."""
         verts = present(self.faces[faces].ravel(), self.n)
         radius, pad = self._still.reach(self.thickness, self.margin)
@@ -310,7 +310,7 @@ class SelfCollider:
         """((vertex, triangle, near), (edge pairs, near)) that meet in ``box`` (lo, hi, ends, motion: as
         :meth:`_find` takes them): all, or (``dirty`` (N,) bool) those with a dirty vertex."""
         lo, hi, ends, motion = box
-        find = partial(find, lo=lo, hi=hi, x=lo if ends is None else ends, motion=motion, exact=ends is not None)
+        find = partial(find, lo=lo, hi=hi, x=ends, motion=motion, exact=True)
         edge_pairs = partial(self._edge_pairs, lo=lo, hi=hi, ends=ends, motion=motion, patch_pairs=patch_pairs)
         if dirty is None:
             return find(verts, faces), edge_pairs(edge_ids, dirty=None)
