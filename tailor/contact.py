@@ -444,8 +444,8 @@ class ContactPipeline:
         if self.body is None:
             return 0
         bx, bv, k = self.motion.at(state.t)
-        moved = self.body.rescue(model, state, bx, bv, k, thickness=self.body_thickness(model), 
-                                 keep=None if math.isinf(self._rescue_limit) else partial(_bearable, model, state.x, self._rescue_limit))
+        keep = None if math.isinf(self._rescue_limit) else partial(_bearable, model, state.x, self._rescue_limit)
+        moved = self.body.rescue(model, state, bx, bv, k, thickness=self.body_thickness(model), keep=keep)
         if moved:
             self._restart(state.x)
         self.rescued += moved

@@ -208,7 +208,7 @@ def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_
     grid = Grid(lo - 0.02, hi + 0.02, 0.02)
     ring = (np.zeros(2 * n + 1, np.int64), np.zeros(0, np.int64))
     args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02,
-            np.zeros(n), *ring, NO_PATCH_PAIRS, np.zeros((0, 3)), np.zeros((0, 3)), False)
+            np.zeros(n), *ring, NO_PATCH_PAIRS, np.zeros((0, 3)), np.zeros((0, 3)), False, 0.0)
     (want, want_near), (got, got_near) = _ee_pairs(*args), _ee_pairs_guessed(*args, _GUESS_PAIRS)
     first = np.isin(want[:, 0] // 2, np.arange(_GUESS_CHUNK)).sum()
     assert first > _GUESS_CHUNK * _GUESS_PAIRS and len(want) - first > 100  # one chunk overflowed, the others did not
