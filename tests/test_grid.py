@@ -112,6 +112,9 @@ def test_swept_exact_vertex_triangle_pairs_miss_none_that_come_near_on_the_motio
                 near.add((p, k))
     assert len(near) > 30 and near <= got <= boxes
     assert len(got) < 0.8 * len(boxes)
+    # a slack widens the primitives' test alone: more pairs, never beyond the boxes'
+    v, t, _ = vertex_triangle_pairs(verts, tris, faces, lo, hi, x1, radius, 0.03, ring, exact=True, motion=x1 - x0, slack=0.003)
+    assert got < set(zip(v.tolist(), t.tolist())) <= boxes
 
 
 def test_swept_exact_edge_edge_pairs_miss_none_that_come_near_on_the_motion_and_drop_many_the_boxes_keep():
@@ -134,6 +137,7 @@ def test_swept_exact_edge_edge_pairs_miss_none_that_come_near_on_the_motion_and_
     near = {pair for pair, d in zip(sample, closest) if d <= radius}
     assert len(near) > 30 and near <= got <= boxes
     assert len(got) < 0.8 * len(boxes)
+    assert got < key(edge_edge_pairs(ids, edges, lo, hi, radius, 0.03, ring, x=x1, motion=x1 - x0, slack=0.003)[0]) <= boxes
 
 
 @pytest.mark.parametrize("cell", [0.03, 0.004])
