@@ -70,76 +70,6 @@ def test_edge_edge_pairs_are_exactly_the_brute_force_ones_each_once(cell):
     assert np.array_equal(near, [any(p * len(x) + q in keys for p in r[:2] for q in r[2:]) for r in pairs.tolist()])
 
 
-def _moving_sheets(rng, sheets=3, n=10, edge=0.01):
-    """Sheets of cloth (``n`` × ``n`` vertices, ``edge`` apart) a few millimetres over one another, each
-    carried by its own motion with some scatter: (start, end, faces)."""
-    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    flat = np.column_stack([i.ravel(), j.ravel(), np.zeros(n * n)]) * edge
-    quad = (i[:-1, :-1] * n + j[:-1, :-1]).ravel()
-    one = np.concatenate([np.column_stack([quad, quad + n, quad + 1]), np.column_stack([quad + 1, quad + n, quad + n + 1])])
-    x1 = np.concatenate([flat + [0.3 * edge * k, 0.2 * edge * k, 0.009 * k] for k in range(sheets)])
-    x1 += rng.normal(0.0, 0.001, x1.shape)
-    faces = np.concatenate([one + k * n * n for k in range(sheets)])
-    carry = np.repeat(rng.normal(0.0, 0.01, (sheets, 3)), n * n, axis=0)
-    return x1 - carry - rng.normal(0.0, 0.002, x1.shape), x1, faces
-
-
-def _segment_distances(p, q, a, b, samples=41):
-    """(K,) distance between segments pq and ab (K, 3 each), both sampled at ``samples`` points."""
-    s = np.linspace(0.0, 1.0, samples)[None, :, None]
-    u, v = p[:, None] + s * (q - p)[:, None], a[:, None] + s * (b - a)[:, None]
-    return np.linalg.norm(u[:, :, None] - v[:, None], axis=3).min(axis=(1, 2))
-
-
-def test_swept_exact_vertex_triangle_pairs_miss_none_that_come_near_on_the_motion_and_drop_many_the_boxes_keep():
-    """The test of the primitives (distance at the end less the corners' largest relative motion) keeps
-    every pair that comes within the radius anywhere on the straight-line motion (sampled at 65
-    instants), and drops a good share of the pairs whose boxes alone meet."""
-    rng = np.random.default_rng(11)
-    x0, x1, faces = _moving_sheets(rng)
-    lo, hi = np.minimum(x0, x1), np.maximum(x0, x1)
-    verts, tris, radius = np.arange(len(x1)), np.arange(len(faces)), 0.005
-    ring = _ring(len(x1), faces)[:2]
-    boxes = set(zip(*[a.tolist() for a in vertex_triangle_pairs(verts, tris, faces, lo, hi, x1, radius, 0.03, ring, exact=False)[:2]]))
-    v, t, _ = vertex_triangle_pairs(verts, tris, faces, lo, hi, x1, radius, 0.03, ring, exact=True, motion=x1 - x0)
-    got = set(zip(v.tolist(), t.tolist()))
-    near = set()
-    for tau in np.linspace(0.0, 1.0, 65):
-        x = x0 + tau * (x1 - x0)
-        for p, k in boxes:
-            f = faces[k]
-            if np.linalg.norm(x[p] - np.dot(closest_barycentric(x[p], *x[f]), x[f])) <= radius:
-                near.add((p, k))
-    assert len(near) > 30 and near <= got <= boxes
-    assert len(got) < 0.8 * len(boxes)
-    # a slack widens the primitives' test alone: more pairs, never beyond the boxes'
-    v, t, _ = vertex_triangle_pairs(verts, tris, faces, lo, hi, x1, radius, 0.03, ring, exact=True, motion=x1 - x0, slack=0.003)
-    assert got < set(zip(v.tolist(), t.tolist())) <= boxes
-
-
-def test_swept_exact_edge_edge_pairs_miss_none_that_come_near_on_the_motion_and_drop_many_the_boxes_keep():
-    rng = np.random.default_rng(12)
-    x0, x1, faces = _moving_sheets(rng)
-    lo, hi = np.minimum(x0, x1), np.maximum(x0, x1)
-    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
-    ids, radius = np.arange(len(edges)), 0.005
-    ring = _ring(len(x1), faces)[:2]
-    key = lambda pairs: {frozenset([tuple(p[:2]), tuple(p[2:])]) for p in pairs.tolist()}
-    boxes = key(edge_edge_pairs(ids, edges, lo, hi, radius, 0.03, ring)[0])
-    got = key(edge_edge_pairs(ids, edges, lo, hi, radius, 0.03, ring, x=x1, motion=x1 - x0)[0])
-    ordered = sorted(boxes, key=sorted)
-    sample = [ordered[k] for k in rng.choice(len(ordered), 1500, replace=False)]  # the motion sampled for these
-    ends = np.array([[*sorted(pair)[0], *sorted(pair)[1]] for pair in sample])
-    closest = np.full(len(ends), np.inf)
-    for tau in np.linspace(0.0, 1.0, 33):
-        x = x0 + tau * (x1 - x0)
-        closest = np.minimum(closest, _segment_distances(*(x[ends[:, c]] for c in range(4))))
-    near = {pair for pair, d in zip(sample, closest) if d <= radius}
-    assert len(near) > 30 and near <= got <= boxes
-    assert len(got) < 0.8 * len(boxes)
-    assert got < key(edge_edge_pairs(ids, edges, lo, hi, radius, 0.03, ring, x=x1, motion=x1 - x0, slack=0.003)[0]) <= boxes
-
-
 @pytest.mark.parametrize("cell", [0.03, 0.004])
 def test_edge_edge_pairs_of_dirty_edges_are_the_brute_force_ones_touching_them_each_once(cell):
     """A partial query: only the pairs with at least one dirty edge, each once, none among clean ones."""
@@ -212,7 +142,7 @@ def test_edge_pairs_found_in_one_pass_are_the_two_pass_ones_in_order_where_some_
     grid = Grid(lo - 0.02, hi + 0.02, 0.02)
     ring = (np.zeros(2 * n + 1, np.int64), np.zeros(0, np.int64))
     args = (np.arange(n), edges, lo, hi, np.flatnonzero(dirty).astype(np.int64), dirty, grid.origin, grid.cell, grid.dims, 0.02,
-            np.zeros(n), *ring, NO_PATCH_PAIRS, np.zeros((0, 3)), np.zeros((0, 3)), False, 0.0)
+            np.zeros(n), *ring, NO_PATCH_PAIRS)
     (want, want_near), (got, got_near) = _ee_pairs(*args), _ee_pairs_guessed(*args, _GUESS_PAIRS)
     first = np.isin(want[:, 0] // 2, np.arange(_GUESS_CHUNK)).sum()
     assert first > _GUESS_CHUNK * _GUESS_PAIRS and len(want) - first > 100  # one chunk overflowed, the others did not

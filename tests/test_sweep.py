@@ -4,7 +4,7 @@ comes near during it, from fewer candidates than the whole step's boxes."""
 import numpy as np
 
 from tailor.collide.grid import edge_edge_pairs, unique_edges, vertex_rings, vertex_triangle_pairs
-from tailor.collide.sweep import part_boxes, part_sweeps, sweep_parts, union_edge_edge, union_vertex_triangle
+from tailor.collide.sweep import part_boxes, sweep_parts, union_edge_edge, union_vertex_triangle
 from tailor.scenes import grid as sheet
 
 
@@ -52,40 +52,6 @@ def test_a_step_in_parts_finds_every_pair_near_at_any_time_from_fewer_candidates
         xt = (1.0 - t) * x0 + t * x1
         (v, tri, _), (e, _) = search(xt, xt)
         assert _vt_keys(v, tri, f) <= _vt_keys(*vt[:2], f) and _ee_keys(e) <= _ee_keys(ee)
-
-
-def test_the_parts_tested_exactly_still_find_every_pair_near_at_any_time_from_fewer_candidates_than_their_boxes():
-    """Each part's search keeps only the pairs whose primitives come near within the part (their
-    distance at its end less their corners' largest relative motion in it): the swinging flap's
-    pairs near at any of 41 instants are all among them, whole or in parts, fewer than the boxes let
-    through in parts; judged at the end alone (no motion), the whole step misses many."""
-    faces, x0, x1 = _swinging_flap()
-    n, f = len(x0), len(faces)
-    ring, edges = vertex_rings(faces, n), unique_edges(faces, n)
-    verts, tris, ids = np.arange(n), np.arange(f), np.arange(len(edges))
-    radius, cell = 0.025, 0.04  # beyond the 2 cm edges: a flat sheet's own pairs are near too
-
-    def search(lo, hi, end, motion, exact=True):
-        v, t, near = vertex_triangle_pairs(verts, tris, faces, lo, hi, end, radius, cell, ring, exact=exact, motion=motion)
-        return (v, t, near), edge_edge_pairs(ids, edges, lo, hi, radius, cell, ring, x=end if exact else None, motion=motion)
-
-    def union(found):
-        vt = union_vertex_triangle([p[0] for p in found], f)
-        return _vt_keys(*vt[:2], f), _ee_keys(union_edge_edge([p[1] for p in found], edges, n)[0])
-
-    near_vt, near_ee = set(), set()
-    for t in np.linspace(0.0, 1.0, 41):
-        xt = (1.0 - t) * x0 + t * x1
-        (v, tri, _), (e, _) = search(xt, xt, xt, None)
-        near_vt |= _vt_keys(v, tri, f)
-        near_ee |= _ee_keys(e)
-    for parts in (1, 4):
-        vt, ee = union([search(*part) for part in part_sweeps(x0, x1, parts)])
-        box_vt, box_ee = union([search(*part, exact=False) for part in part_sweeps(x0, x1, parts)])
-        assert near_vt <= vt <= box_vt and near_ee <= ee <= box_ee
-        assert parts == 1 or (len(ee) < len(box_ee) and len(vt) < len(box_vt))  # a whole 28 cm swing prunes little
-    still_vt, still_ee = union([search(*part[:3], np.zeros_like(x0)) for part in part_sweeps(x0, x1, 1)])
-    assert len(near_vt - still_vt) > 0.1 * len(near_vt) and len(near_ee - still_ee) > 0.1 * len(near_ee)
 
 
 def test_steps_shorter_than_the_parts_are_searched_whole():

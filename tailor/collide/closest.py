@@ -7,7 +7,7 @@ import math
 
 from numba import njit, prange
 
-__all__ = ['nearest_into', 'TIE', 'closest_barycentric', 'segment_gap2', 'spread']
+__all__ = ['nearest_into', 'TIE']
 
 
 @njit(cache=True, inline="always")
@@ -51,50 +51,6 @@ def closest_barycentric(p, a, b, c):
     v = vb * denom
     w = vc * denom
     return 1.0 - v - w, v, w  # face
-
-
-@njit(cache=True)
-def segment_gap2(x, a0, a1, b0, b1):
-    """Squared distance between segments a0a1 and b0b1 (rows of ``x``), ends included (Ericson,
-    RTCD 5.1.9; a segment shorter than 1e-15 m taken as its point). Scalar arithmetic throughout."""
-    d1 = (x[a1, 0] - x[a0, 0], x[a1, 1] - x[a0, 1], x[a1, 2] - x[a0, 2])
-    d2 = (x[b1, 0] - x[b0, 0], x[b1, 1] - x[b0, 1], x[b1, 2] - x[b0, 2])
-    r = (x[a0, 0] - x[b0, 0], x[a0, 1] - x[b0, 1], x[a0, 2] - x[b0, 2])
-    a = _dot3(d1[0], d1[1], d1[2], d1[0], d1[1], d1[2])
-    e = _dot3(d2[0], d2[1], d2[2], d2[0], d2[1], d2[2])
-    f = _dot3(d2[0], d2[1], d2[2], r[0], r[1], r[2])
-    s, t = 0.0, 0.0
-    if a <= 1e-30 and e > 1e-30:
-        t = min(max(f / e, 0.0), 1.0)
-    elif a > 1e-30:
-        c = _dot3(d1[0], d1[1], d1[2], r[0], r[1], r[2])
-        if e <= 1e-30:
-            s = min(max(-c / a, 0.0), 1.0)
-        else:
-            b = _dot3(d1[0], d1[1], d1[2], d2[0], d2[1], d2[2])
-            den = a * e - b * b
-            s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 0.0 else 0.0
-            t = (b * s + f) / e
-            if t < 0.0:
-                t, s = 0.0, min(max(-c / a, 0.0), 1.0)
-            elif t > 1.0:
-                t, s = 1.0, min(max((b - c) / a, 0.0), 1.0)
-    g = 0.0
-    for q in range(3):
-        h = r[q] + s * d1[q] - t * d2[q]
-        g += h * h
-    return g
-
-
-@njit(cache=True, inline="always")
-def spread(motion, i, j):
-    """Distance [m] between the motions of rows ``i`` and ``j`` of ``motion``: how far two points of two
-    primitives can come nearer over a straight-line step than they are at its end."""
-    g = 0.0
-    for q in range(3):
-        h = motion[i, q] - motion[j, q]
-        g += h * h
-    return math.sqrt(g)
 
 
 @njit(cache=True, inline="always")

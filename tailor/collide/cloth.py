@@ -13,11 +13,7 @@ threshold distance from the cloth's vertices") runs in three stages:
    another, found between boxes swept from each vertex's place at the last step to its place now
    (relative to the cloth's centroid; a long step in parts, :mod:`.sweep`), over a compiled uniform
    grid rebuilt each query (:mod:`.grid`: python-fcl can neither refit nor hand back pairs without
-   a Python object each); of the pairs whose boxes meet, only those whose primitives themselves
-   come within a margin more (their distance at the step's end less their corners' largest relative
-   motion): the response replays the step with the velocities its contacts change, off the straight
-   line by up to about that (without it a tucked T-shirt's settling tore at 12×).
-   Each vertex is anchored where it was last queried; a pair stays valid
+   a Python object each). Each vertex is anchored where it was last queried; a pair stays valid
    while neither end moves ``margin / 2`` from its anchor (they approach by less than ``margin``).
    A ``partial`` collider (an outfit's) finds again only the pairs touching the vertices that have
    (the others' anchors are their boxes), unless most have. Vertices held still (an outfit's sewn
@@ -67,7 +63,7 @@ from .layers import Layers
 from .open_seams import OpenSeams
 from .margins import MarginSchedule, self_margin
 from .still import StillVertices
-from .sweep import part_sweeps, sweep_parts, union_edge_edge, union_vertex_triangle
+from .sweep import part_boxes, sweep_parts, union_edge_edge, union_vertex_triangle
 from .regions import PATCH_EDGES, PATCH_MIN, Regions
 
 __all__ = ["SelfCollider", "SELF_COLLISION_MODES", "Layers"]
@@ -210,11 +206,9 @@ class SelfCollider:
         t0 = time.perf_counter()
         self._reach = self.margin + (2.0 * step if math.isfinite(step) else 0.0)
         lo, hi = (rx, rx) if rxp is None else (np.minimum(rx, rxp), np.maximum(rx, rxp))  # each vertex's box over the step
-        ends, motion = rx, (np.zeros_like(rx) if rxp is None else rx - rxp)  # where each box's motion ends, and that motion
         if moving is not None:  # the others stay at their anchors
             still = ~moving
             lo, hi = np.where(still[:, None], self._anchor, lo), np.where(still[:, None], self._anchor, hi)
-            ends, motion = np.where(still[:, None], self._anchor, ends), np.where(still[:, None], 0.0, motion)
         faces, pairs = self._touching(rx, (lo, hi))
         dirty = None
         if moving is not None:
@@ -236,8 +230,8 @@ class SelfCollider:
             self.stats["queries"] += 1
         self._pairs = pairs
         parts = 1 if moving is not None or rxp is None else sweep_parts(step, self._mean_edge)
-        boxes = [(lo, hi, ends, motion)] if parts == 1 else list(part_sweeps(rxp, rx, parts))
-        self._find(rx, boxes, faces, dirty)
+        boxes = [(lo, hi)] if parts == 1 else list(part_boxes(rxp, rx, parts))
+        self._find(rx, boxes, faces, dirty, exact=rxp is None)
         self.stats["query_s"] += time.perf_counter() - t0
 
     def _patch_pairs(self):
@@ -265,27 +259,27 @@ class SelfCollider:
                         | kept(ee[out, :2, None], ee[out, None, 2:]).reshape(len(out), 4).any(axis=1))
         return keep_vt, keep_ee
 
-    def _find(self, x, boxes, faces, dirty):
-        """The candidates among ``faces`` and their vertices at ``x``, from ``boxes``: (lo, hi) round each
-        vertex over the step, or each part of it (:mod:`.sweep`), with (ends, motion) where the step's
-        (or the part's) straight-line motion ends and that motion, (N, 3) each, for the exact test of
-        the primitives themselves; all of them, or (``dirty`` (N,) bool, the step whole)
+    def _find(self, x, boxes, faces, dirty, *, exact):
+        """The candidates among ``faces`` and their vertices (boxes (lo, hi) round each vertex over the
+        step, or each part of it: :mod:`.sweep`): all of them, or (``dirty`` (N,) bool, the step whole)
         the pairs touching a dirty vertex added to the kept ones that touch none."""
         verts = present(self.faces[faces].ravel(), self.n)
         radius, pad = self._still.reach(self.thickness, self.margin)
         # a triangle at the vertex is never a contact; one touching its 1-ring only once crossed
         # (ignoring those, a strip crumpling over one or two triangles passed through itself)
         patch_pairs = self._patch_pairs()
-        find = partial(vertex_triangle_pairs, faces=self.faces, radius=radius, cell=self._grid_cell,
-                       ring=self._ring_csr, patch_pairs=patch_pairs, room=self._rooms[0], pad=pad)
+        find = partial(vertex_triangle_pairs, faces=self.faces, x=x, radius=radius, cell=self._grid_cell,
+                       ring=self._ring_csr, exact=exact, patch_pairs=patch_pairs, room=self._rooms[0], pad=pad)
         edge_ids = present(self._face_edges[faces].ravel(), len(self._edges))
         if dirty is None and self._still.mask is not None and len(boxes) == 1:  # pairs among the still left out
-            (vertex, tri, near), (ee, ee_near) = self._pairs_meeting(find, verts, faces, edge_ids, boxes[0], ~self._still.mask,
+            (lo, hi), = boxes
+            (vertex, tri, near), (ee, ee_near) = self._pairs_meeting(find, verts, faces, edge_ids, lo, hi, ~self._still.mask,
                                                                      patch_pairs)
         elif dirty is None:
             (vertex, tri, near), (ee, ee_near) = self._search(find, verts, faces, edge_ids, boxes, patch_pairs)
         else:
-            (vertex, tri, near), (ee, ee_near) = self._pairs_meeting(find, verts, faces, edge_ids, boxes[0], dirty, patch_pairs)
+            (lo, hi), = boxes
+            (vertex, tri, near), (ee, ee_near) = self._pairs_meeting(find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs)
         keep_vt, keep_ee = self._in_touching_patches(vertex, tri, ee)
         vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
         vertex, tri, near, ee, ee_near = self._seams.drop(self.faces, vertex, tri, near, ee, ee_near)
@@ -305,28 +299,27 @@ class SelfCollider:
 
     def _search(self, find, verts, faces, edge_ids, boxes, patch_pairs):
         """((vertex, triangle, near), (edge pairs, near)) of every pair whose boxes meet in one of ``boxes``."""
-        found = [self._pairs_meeting(find, verts, faces, edge_ids, box, None, patch_pairs) for box in boxes]
+        found = [self._pairs_meeting(find, verts, faces, edge_ids, lo, hi, None, patch_pairs) for lo, hi in boxes]
         return found[0] if len(found) == 1 else (union_vertex_triangle([f[0] for f in found], len(self.faces)),
                                                  union_edge_edge([f[1] for f in found], self._edges, max(self.n, 1)))
 
-    def _pairs_meeting(self, find, verts, faces, edge_ids, box, dirty, patch_pairs):
-        """((vertex, triangle, near), (edge pairs, near)) that meet in ``box`` (lo, hi, ends, motion: as
-        :meth:`_find` takes them): all, or (``dirty`` (N,) bool) those with a dirty vertex."""
-        lo, hi, ends, motion = box
-        find = partial(find, lo=lo, hi=hi, x=ends, motion=motion, exact=True, slack=self.margin)
-        edge_pairs = partial(self._edge_pairs, lo=lo, hi=hi, ends=ends, motion=motion, patch_pairs=patch_pairs)
+    def _pairs_meeting(self, find, verts, faces, edge_ids, lo, hi, dirty, patch_pairs):
+        """((vertex, triangle, near), (edge pairs, near)) whose boxes (lo, hi) meet: all, or (``dirty``
+        (N,) bool) those with a dirty vertex."""
+        find = partial(find, lo=lo, hi=hi)
         if dirty is None:
-            return find(verts, faces), edge_pairs(edge_ids, dirty=None)
+            return find(verts, faces), self._edge_pairs(edge_ids, lo, hi, None, patch_pairs)
         moved = dirty[verts]
         parts = (find(verts[moved], faces), find(verts[~moved], faces[touching(self.faces[faces], dirty)]))
-        return tuple(np.concatenate(p) for p in zip(*parts)), edge_pairs(edge_ids, dirty=touching(self._edges[edge_ids], dirty))
+        return (tuple(np.concatenate(p) for p in zip(*parts)),
+                self._edge_pairs(edge_ids, lo, hi, touching(self._edges[edge_ids], dirty), patch_pairs))
 
-    def _edge_pairs(self, ids, *, lo, hi, ends, motion, dirty, patch_pairs):
+    def _edge_pairs(self, ids, lo, hi, dirty, patch_pairs):
         if not self.edges:
             return np.zeros((0, 4), np.int64), np.zeros(0, bool)
         radius, pad = self._still.reach(self.thickness, self.margin)
-        return edge_edge_pairs(ids, self._edges, lo, hi, radius, self._grid_cell, self._ring_csr, dirty=dirty,
-                               patch_pairs=patch_pairs, room=self._rooms[1], pad=pad, x=ends, motion=motion, slack=self.margin)
+        return edge_edge_pairs(ids, self._edges, lo, hi, radius, self._grid_cell, self._ring_csr,
+                               dirty=dirty, patch_pairs=patch_pairs, room=self._rooms[1], pad=pad)
 
     def _tri_sides(self, vertex, tri):
         """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""

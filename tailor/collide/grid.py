@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit, prange
 
 from .bounds import axis_bounds
-from .closest import closest_barycentric, segment_gap2, spread
+from .closest import closest_barycentric
 from .patch_pairs import NO_PATCH_PAIRS, edge_edge_passes, vertex_triangle_passes
 
 __all__ = ["overlapping_boxes", "vertex_rings", "Grid", "bin_boxes", "cell_of", "cell_span", "gap2", "owns", "vertex_triangle_pairs", "edge_edge_pairs", "element_pads", "MAX_CELLS", "PairRoom"]
@@ -223,12 +223,11 @@ def _joined(out, out_near, used, room):
 
 
 @njit(cache=True)
-def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, motion, ptr, items, origin, cell,
-            dims, r, v_pad, t_pad, pad_max, exact, slack, patch_pairs, limit=-1):
+def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items, origin, cell, dims,
+            r, v_pad, t_pad, pad_max, exact, patch_pairs, limit=-1):
     """Write (rows (vertex, triangle) of ``out`` from ``start``) and count the triangles within ``r``
     of active vertex ``q``, the two's pads (``v_pad[q]``, ``t_pad[t]``, at most ``pad_max``) added; with
-    ``limit`` ≥ 0 none is written at or beyond it (they are still counted). With ``exact``, the
-    vertex and the triangle themselves (:func:`vertex_triangle_pairs`)."""
+    ``limit`` ≥ 0 none is written at or beyond it (they are still counted)."""
     p = verts[q]
     found = 0
     i0, j0, k0, i1, j1, k1 = cell_span(v_lo[q], v_hi[q], r + v_pad[q] + pad_max, origin, cell, dims)
@@ -253,8 +252,7 @@ def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo
                         for e in range(3):
                             g = x[p, e] - (u * x[f[0], e] + v * x[f[1], e] + w * x[f[2], e])
                             d2 += g * g
-                        rel = max(spread(motion, p, f[0]), spread(motion, p, f[1]), spread(motion, p, f[2]))
-                        if math.sqrt(d2) - rel > rp + slack:
+                        if d2 > r2:
                             continue
                     if limit < 0 or start + found < limit:
                         out[start + found, 0] = p
@@ -267,8 +265,8 @@ def _vt_one(q, out, out_near, start, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo
 
 
 @njit(cache=True, parallel=True)
-def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, motion, origin, cell, dims, r, v_pad, t_pad, exact, slack, ring_ptr, ring_idx,
-              patch_pairs, per):
+def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, origin, cell, dims, r, v_pad, t_pad, exact, ring_ptr, ring_idx, patch_pairs,
+              per):
     """The triangles of every active vertex in one pass where they fit, ``per`` a vertex (as :func:`_ee_pairs_guessed`)."""
     ptr, items = bin_boxes(t_lo, t_hi, origin, cell, dims)
     pad_max = t_pad.max() if len(t_pad) else 0.0
@@ -278,15 +276,15 @@ def _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, motion, origin, cel
         written = 0
         for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
             written += _vt_one(q, out, out_near, ch * room + written, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris,
-                               faces, x, motion, ptr, items, origin, cell, dims, r, v_pad, t_pad, pad_max, exact, slack, patch_pairs, (ch + 1) * room)
+                               faces, x, ptr, items, origin, cell, dims, r, v_pad, t_pad, pad_max, exact, patch_pairs, (ch + 1) * room)
         used[ch] = written
     pairs, near, starts = _joined(out, out_near, used, room)
     for ch in range(chunks):
         if used[ch] > room:  # overflowed: written again, in full
             pos = starts[ch]
             for q in range(ch * _GUESS_CHUNK, min(n, (ch + 1) * _GUESS_CHUNK)):
-                pos += _vt_one(q, pairs, near, pos, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, motion, ptr, items,
-                               origin, cell, dims, r, v_pad, t_pad, pad_max, exact, slack, patch_pairs)
+                pos += _vt_one(q, pairs, near, pos, ring_ptr, ring_idx, verts, v_lo, v_hi, t_lo, t_hi, tris, faces, x, ptr, items,
+                               origin, cell, dims, r, v_pad, t_pad, pad_max, exact, patch_pairs)
     return pairs, near
 
 
@@ -305,7 +303,7 @@ def _boxes_of(lo, hi, elements, rows):
     return out_lo, out_hi
 
 
-def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool, motion=None, slack: float = 0.0,
+def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: float, ring, *, exact: bool,
                           patch_pairs=NO_PATCH_PAIRS, room: PairRoom | None = None, pad=None):
     """(vertex, triangle, near) of the pairs, grouped by vertex in the order of ``verts``: each of
     ``verts`` against each of the triangles ``tris`` (rows of ``faces``) not at it whose boxes come
@@ -316,13 +314,7 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     ``radius`` plus the vertex's pad plus the largest of the triangle's corners' (:func:`element_pads`).
 
     ``lo``/``hi`` (N, 3) are boxes round every vertex (its motion over a step; both ``x`` for points).
-    With ``exact`` the triangle itself must come within ``radius`` of the vertex on the straight-line
-    motion ending at ``x``: their distance at ``x`` less the largest distance between the vertex's
-    ``motion`` (N, 3) and a corner's (default: none; ``x`` minus the start) is within it (every point
-    of the triangle moves by a weighted mean of its corners' motions, so no two points of the pair
-    came nearer over the step than that): where cloth moves together, far fewer pairs than the
-    boxes let through. ``slack`` [m] widens that test alone (a path bent by contact responses on its
-    way: :class:`~tailor.collide.cloth.SelfCollider`). Only the
+    With ``exact`` the triangle itself must come within ``radius`` of the vertex at ``x``. Only the
     pairs ``patch_pairs`` lets through (:meth:`~tailor.collide.patch_pairs.PatchPairs.arrays`; default: all).
     ``room`` sizes the search's chunks and learns from it (default: :data:`_GUESS_TRIANGLES` a vertex).
     """
@@ -339,10 +331,8 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
     (t_min, _), (_, t_max) = axis_bounds(t_lo), axis_bounds(t_hi)
     (v_min, _), (_, v_max) = axis_bounds(v_lo), axis_bounds(v_hi)
     grid = Grid(np.vstack([t_min, v_min - reach]), np.vstack([t_max, v_max + reach]), cell)
-    x = np.ascontiguousarray(x, np.float64)
-    motion = np.zeros_like(x) if motion is None else np.ascontiguousarray(motion, np.float64)
-    pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, x, motion, grid.origin,
-                            grid.cell, grid.dims, float(radius), v_pad, t_pad, bool(exact), float(slack), *ring, patch_pairs,
+    pairs, near = _vt_pairs(verts, v_lo, v_hi, tris, faces, t_lo, t_hi, np.ascontiguousarray(x, np.float64), grid.origin,
+                            grid.cell, grid.dims, float(radius), v_pad, t_pad, bool(exact), *ring, patch_pairs,
                             _GUESS_TRIANGLES if room is None else room.per)
     if room is not None:
         room.learn(len(pairs), len(verts))
@@ -351,11 +341,10 @@ def vertex_triangle_pairs(verts, tris, faces, lo, hi, x, radius: float, cell: fl
 
 @njit(cache=True)
 def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin, cell, dims, r,
-            pad, pad_max, patch_pairs, x, motion, exact, slack, limit=-1):
+            pad, pad_max, patch_pairs, limit=-1):
     """Count (``fill`` False) or write the edges within ``r`` of edge ``q``, the two's pads (``pad``,
     at most ``pad_max``) added, sharing no end: every clean one, and the dirty ones after it (each
-    dirty pair once); with ``limit`` ≥ 0 none is written at or beyond it (they are still counted).
-    With ``exact``, the segments themselves (:func:`edge_edge_pairs`)."""
+    dirty pair once); with ``limit`` ≥ 0 none is written at or beyond it (they are still counted)."""
     a0, a1 = edges[ids[q], 0], edges[ids[q], 1]
     found = 0
     i0, j0, k0, i1, j1, k1 = cell_span(e_lo[q], e_hi[q], r + pad[q] + pad_max, origin, cell, dims)
@@ -377,9 +366,6 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
                         continue
                     if not edge_edge_passes(patch_pairs, ids[q], ids[s], a0, a1, b0, b1):
                         continue
-                    if exact and math.sqrt(segment_gap2(x, a0, a1, b0, b1)) - max(
-                            spread(motion, a0, b0), spread(motion, a0, b1), spread(motion, a1, b0), spread(motion, a1, b1)) > rp + slack:
-                        continue
                     if fill and (limit < 0 or start + found < limit):
                         out[start + found, 0] = a0
                         out[start + found, 1] = a1
@@ -394,8 +380,7 @@ def _ee_one(q, fill, out, out_near, start, ring_ptr, ring_idx, ids, edges, e_lo,
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, pad, ring_ptr, ring_idx, patch_pairs, x, motion, exact,
-                      slack, per):
+def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, pad, ring_ptr, ring_idx, patch_pairs, per):
     """:func:`_ee_pairs` in one pass where it can: each chunk of :data:`_GUESS_CHUNK` queries writes
     into room for ``per`` pairs a query; the chunks' pairs are joined in order and only a chunk that
     overflowed is searched again, straight into its place (the same pairs, in the same order)."""
@@ -408,7 +393,7 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
         written = 0
         for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
             written += _ee_one(queries[k], True, out, out_near, first + written, ring_ptr, ring_idx, ids, edges, e_lo, e_hi,
-                               dirty, ptr, items, origin, cell, dims, r, pad, pad_max, patch_pairs, x, motion, exact, slack, end)
+                               dirty, ptr, items, origin, cell, dims, r, pad, pad_max, patch_pairs, end)
         used[ch] = written
     pairs, near, starts = _joined(out, out_near, used, room)
     for ch in range(chunks):
@@ -416,12 +401,12 @@ def _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims
             pos = starts[ch]
             for k in range(ch * _GUESS_CHUNK, min(nq, (ch + 1) * _GUESS_CHUNK)):
                 pos += _ee_one(queries[k], True, pairs, near, pos, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items,
-                               origin, cell, dims, r, pad, pad_max, patch_pairs, x, motion, exact, slack)
+                               origin, cell, dims, r, pad, pad_max, patch_pairs)
     return pairs, near
 
 
 @njit(cache=True, parallel=True)
-def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, pad, ring_ptr, ring_idx, patch_pairs, x, motion, exact, slack):
+def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, pad, ring_ptr, ring_idx, patch_pairs):
     """The edge pairs of every query, counted in one pass and written in a second: the reference
     :func:`_ee_pairs_guessed` is checked against (tests/test_grid.py)."""
     ptr, items = bin_boxes(e_lo, e_hi, origin, cell, dims)
@@ -431,14 +416,14 @@ def _ee_pairs(ids, edges, e_lo, e_hi, queries, dirty, origin, cell, dims, r, pad
     no = np.zeros(0, np.bool_)
     for k in prange(len(queries)):
         counts[k] = _ee_one(queries[k], False, dummy, no, 0, ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
-                            cell, dims, r, pad, pad_max, patch_pairs, x, motion, exact, slack)
+                            cell, dims, r, pad, pad_max, patch_pairs)
     starts = np.zeros(len(queries) + 1, np.int64)
     starts[1:] = np.cumsum(counts)
     out = np.empty((starts[-1], 4), np.int64)
     out_near = np.empty(starts[-1], np.bool_)
     for k in prange(len(queries)):
         _ee_one(queries[k], True, out, out_near, starts[k], ring_ptr, ring_idx, ids, edges, e_lo, e_hi, dirty, ptr, items, origin,
-                cell, dims, r, pad, pad_max, patch_pairs, x, motion, exact, slack)
+                cell, dims, r, pad, pad_max, patch_pairs)
     return out, out_near
 
 
@@ -452,15 +437,14 @@ def element_pads(pad, elements, count: int) -> np.ndarray:
 
 
 def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dirty=None, patch_pairs=NO_PATCH_PAIRS,
-                    room: PairRoom | None = None, pad=None, x=None, motion=None, slack: float = 0.0):
+                    room: PairRoom | None = None, pad=None):
     """((E, 4) end vertices, (E,) near) of the pairs among the edges ``ids`` (rows of ``edges``) that
     share no end and whose boxes (round their ends' boxes ``lo``/``hi``) come within ``radius``, each
     pair once; ``near``: whether an end of one is a neighbour of an end of the other (``ring`` as in
     :func:`vertex_triangle_pairs`). With ``dirty`` ((len(ids),) bool), only the pairs with at least
     one dirty edge (the others are known from an earlier query). Only the pairs ``patch_pairs`` lets
     through (as in :func:`vertex_triangle_pairs`; its edges are the rows of ``edges``); ``room`` and
-    ``pad`` as there. With ``x`` (N, 3), the segments themselves must come within ``radius`` on the
-    straight-line motion ending at ``x`` (``motion`` and ``slack`` as in :func:`vertex_triangle_pairs`)."""
+    ``pad`` as there."""
     ids = np.ascontiguousarray(ids, np.int64)
     if len(ids) < 2:
         return np.zeros((0, 4), np.int64), np.zeros(0, bool)
@@ -471,11 +455,8 @@ def edge_edge_pairs(ids, edges, lo, hi, radius: float, cell: float, ring, *, dir
     reach = radius + 2.0 * float(e_pad.max())
     grid = Grid(axis_bounds(e_lo)[0][None] - reach, axis_bounds(e_hi)[1][None] + reach, cell)
     queries = np.flatnonzero(dirty).astype(np.int64)
-    exact = x is not None
-    x = np.zeros((0, 3)) if x is None else np.ascontiguousarray(x, np.float64)
-    motion = np.zeros_like(x) if motion is None else np.ascontiguousarray(motion, np.float64)
     pairs, near = _ee_pairs_guessed(ids, edges, e_lo, e_hi, queries, dirty, grid.origin, grid.cell, grid.dims, float(radius), e_pad,
-                                    *ring, patch_pairs, x, motion, exact, float(slack), _GUESS_PAIRS if room is None else room.per)
+                                    *ring, patch_pairs, _GUESS_PAIRS if room is None else room.per)
     if room is not None:
         room.learn(len(pairs), len(queries))
     return pairs, near

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-__all__ = ["SWEEP_EDGES", "MAX_SWEEP_PARTS", "sweep_parts", "part_boxes", "part_sweeps", "union_vertex_triangle", "union_edge_edge"]
+__all__ = ["SWEEP_EDGES", "MAX_SWEEP_PARTS", "sweep_parts", "part_boxes", "union_vertex_triangle", "union_edge_edge"]
 
 SWEEP_EDGES = 4.0
 """A step is searched in parts of at most this many mean edge lengths of relative motion."""
@@ -42,15 +42,6 @@ def part_boxes(x_prev, x, parts: int):
         end = x if k == parts else x_prev + (k / parts) * d
         yield np.minimum(start, end), np.maximum(start, end)
         start = end
-
-
-def part_sweeps(x_prev, x, parts: int):
-    """(lo, hi, end, motion) per part: :func:`part_boxes`' boxes with where each vertex's straight-line
-    motion ends in the part and that part's motion, for the search's exact test
-    (:func:`~tailor.collide.grid.vertex_triangle_pairs`)."""
-    motion = (x - x_prev) / parts
-    for k, (lo, hi) in enumerate(part_boxes(x_prev, x, parts), start=1):
-        yield lo, hi, (x if k == parts else x_prev + k * motion), motion
 
 
 def union_vertex_triangle(found, face_count: int):
