@@ -193,8 +193,46 @@ def test_a_model_of_its_first_vertices_keeps_their_elements_and_refuses_a_cut_th
     assert len(part.hinge_vertices) and part.hinge_vertices.max() < count
     assert part.total_mass == pytest.approx(model.vertex_mass[:count].sum())
     assert model.prefix(model.vertex_count) is model
+    cut = int(model.faces[0].max())
     with pytest.raises(ValueError, match="joins"):
-        model.prefix(int(model.faces[0].max()))
+        model.prefix(cut)
+    held = model.with_pins(np.arange(cut)).prefix(cut)  # a cut through held cloth: the triangles across it dropped
+    assert held.vertex_count == cut and held.face_count == np.all(model.faces < cut, axis=1).sum()
+
+
+def test_held_cloth_far_from_the_garment_sewing_sleeps_out_of_the_model_without_changing_a_force():
+    """The T-shirt sewing over the held trousers: the trousers' legs, farther than the reach from every
+    T-shirt vertex, leave the model (:meth:`Garment.sleep_far`) and stay where they are in the frames;
+    every vertex left free feels the same force as in the whole model (only held cloth lost
+    elements), and the sleepers come back, where they were, when the stage ends."""
+    from tailor.forces import total_forces
+
+    d, _, x0 = prepare(outfit(_patterns("trousers", "tshirt")), read_body("mannequin"), DrapeOptions(resolution=0.04))
+    g = d.garment
+    first, second = g.stage_plan()
+    state = g.sew_stage(g.model.state(x0), first)
+    low = int(np.argmin(state.x[g.model.faces].mean(axis=1)[:, 2]))  # a trouser triangle at an ankle, stretched: free
+    corners = g.model.faces[low]
+    state.x[corners] = state.x[corners].mean(axis=0) + 1.5 * (state.x[corners] - state.x[corners].mean(axis=0))
+    state = g.sew_stage(state, second)
+    assert not g.model.vertex_pinned[g.model.faces[low]].any()
+    state.x[g.weld[g.garment_vertices(0)]] += np.sin(np.arange(len(g.garment_vertices(0))))[:, None] * 0.003  # strained a little
+    whole, weld, x = g.model, g.weld.copy(), g.frame(state)
+    free = np.flatnonzero(~whole.vertex_pinned[weld])
+    before = total_forces(whole, state)[weld[free]]
+    state = g.sleep_far(state, 1, 0.15)
+    tshirt = x[g.garment_vertices(1)]
+    assert len(g.asleep) > 0.3 * len(g.garment_vertices(0))
+    assert np.linalg.norm(x[g.asleep][:, None] - tshirt[None], axis=2).min() > 0.15
+    assert g.model.vertex_count == len(np.unique(g.weld[g.live])) < whole.vertex_count
+    np.testing.assert_allclose(g.frame(state), x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(total_forces(g.model, state)[g.weld[free]], before, rtol=1e-9, atol=1e-12)
+    state.x += 0.01  # the model moves; the sleepers stay
+    asleep, awake = g.asleep, g.live
+    state = g.sew_stage(state, second)
+    assert not len(g.asleep) and g.model.vertex_count == whole.vertex_count
+    np.testing.assert_allclose(g.frame(state)[asleep], x[asleep])
+    np.testing.assert_allclose(g.frame(state)[awake], x[awake] + 0.01)
 
 
 def test_an_outer_loop_is_eased_to_keep_its_own_ease_over_the_inner_loop():

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..constraints import Attachments
 from ..forces import total_forces
@@ -81,6 +82,7 @@ class Garment:
         self._parked = np.zeros((0, 3))  # positions of the waiting garments' simulated vertices (the last of the numbering)
         self.gathered = np.zeros(0, np.intp)  # mesh vertices tucked under a band while it sews, carried by a Gather
         self.frozen = np.zeros(0, np.intp)  # mesh vertices of sewn inner garments held still while an outer one sews
+        self.asleep = np.zeros(0, np.intp)  # frozen mesh vertices out of the model too, far from the garment sewing (sleep_far)
         self._tuck = None  # (mesh vertices tucked, the garment tucking them) once a band closed over them
         self.gravity = False
         self.rebuilds = 0
@@ -121,7 +123,7 @@ class Garment:
         """Weld the merged pairs into one particle each and carry the state over (Eq. 17–18)."""
         x_orig = self._whole(state.x, self._parked)[self.weld]
         v_orig = self._whole(state.v, np.zeros_like(self._parked))[self.weld]
-        new = self.sewing.weld_map(self.mesh.vertex_count)
+        new = self._live_first(self.sewing.weld_map(self.mesh.vertex_count))
         xw, vw = merge_state(x_orig, v_orig, self.mass, new)
         m = build_model(self.mesh, self.fabrics, air_density=AIR_DENSITY, weld=new, compression=COMPRESSION,
                         gravity=(0.0, 0.0, -GRAVITY if self.gravity else 0.0))
@@ -131,7 +133,8 @@ class Garment:
         if self.sewing.open_count:
             pairs = self.sewing.open_pairs(new)
             m = m.with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
-        count = self._simulated(new)
+        live = self.live
+        count = int(new[live].max()) + 1 if not live.all() else int(new.max()) + 1
         self.weld, self.model, self._parked = new, m.prefix(count), xw[count:]
         self.friction = self._panel_friction[self.mesh.vertex_panel[np.unique(new, return_index=True)[1]]][:count]
         self.rebuilds += 1
@@ -139,16 +142,20 @@ class Garment:
         out.t = state.t
         return out
 
-    def _simulated(self, weld) -> int:
-        """How many of the welded vertices are simulated: all but the waiting garments', which
-        :func:`~tailor.outfit.outfit` numbers last (its pieces in layer order, innermost first)."""
+    def _live_first(self, weld) -> np.ndarray:
+        """``weld`` renumbered so the welded vertices simulated now come first, the rest (an outfit's
+        garments waiting to sew, :attr:`asleep` ones) after them, each in its order. The model is
+        then a prefix (:meth:`~tailor.model.Model.prefix`): no element may join the two parts."""
         live = self.live
         if live.all():
-            return int(weld.max()) + 1
-        count = int(weld[~live].min())
-        if int(weld[live].max(initial=-1)) >= count:
-            raise ValueError("an outfit's waiting garments must be numbered after the ones sewing")
-        return count
+            return weld
+        awake = np.zeros(int(weld.max()) + 1, bool)
+        awake[weld[live]] = True
+        if awake[weld[~live]].any():
+            raise ValueError("a welded vertex both simulated and out of the model")
+        order = np.empty(len(awake), np.intp)
+        order[np.argsort(~awake, kind="stable")] = np.arange(len(awake))
+        return order[weld]
 
     @property
     def still(self):
@@ -156,9 +163,9 @@ class Garment:
         the next sews over them); None when none is."""
         if not len(self.frozen):
             return None
-        out = np.zeros(self.model.vertex_count, bool)
+        out = np.zeros(len(self.weld), bool)
         out[self.weld[self.frozen]] = True
-        return out
+        return out[:self.model.vertex_count]
 
     def tuck(self, ids, into: int) -> None:
         """Mesh vertices ``ids`` of the garments inside ``into`` tucked under its band: held (pinned)
@@ -183,9 +190,10 @@ class Garment:
 
     @property
     def live(self) -> np.ndarray:
-        """(mesh vertices,) bool: those simulated now (not waiting to sew)."""
+        """(mesh vertices,) bool: those simulated now (not waiting to sew, nor :attr:`asleep`)."""
         out = np.ones(self.mesh.vertex_count, bool)
         out[self.waiting] = False
+        out[self.asleep] = False
         return out
 
     def stage_plan(self) -> list:
@@ -221,7 +229,7 @@ class Garment:
         nothing until they sew), and those inside, sewn, are held still (:meth:`_frozen_under`).
         Returns the state of the rebuilt model."""
         self.sewing.sew_only(stage.sewing)
-        self.waiting = stage.waiting
+        self.waiting, self.asleep = stage.waiting, np.zeros(0, np.intp)
         self.frozen = self._frozen_under(stage.garment, state.x)
         state = self.rebuild(state)
         state.v[np.unique(self.weld[self.frozen])] = 0.0
@@ -240,12 +248,43 @@ class Garment:
         if self.pattern.pieces[garment].tucks or np.intersect1d(self.attached, self.garment_vertices(garment)).size:
             return np.zeros(0, np.intp)
         faces = np.asarray(self.model.faces)
-        loose = np.zeros(self.model.vertex_count, bool)
+        loose = np.zeros(len(self.weld), bool)  # asleep ones (out of the model) stay still
         loose[faces[face_stretch(self.model, x) > FREEZE_STRETCH].ravel()] = True
         for _ in range(FREEZE_RINGS):
             loose[faces[loose[faces].any(axis=1)].ravel()] = True
         inner = np.flatnonzero(garment_of_vertex(self.pattern, self.mesh.vertex_panel) < garment)
         return inner[~loose[self.weld[inner]]]
+
+    def sleep_far(self, state, garment: int, reach: float):
+        """The frozen vertices (:meth:`sew_stage`) farther than ``reach`` [m] from every vertex of the
+        outfit's ``garment`` (sewing now), and :data:`~.options.FREEZE_RINGS` rings from any vertex
+        that moves, taken out of the model like the garments waiting outside (:attr:`asleep`): held
+        still, they cost the stage's forces, solve and contacts nothing (trousers' legs under a
+        T-shirt sewing at the hips). The elements they drop join held vertices alone. Returns the
+        state of the rebuilt model (the same if none is far)."""
+        if not len(self.frozen):
+            return state
+        x = self.frame(state)
+        frozen = np.zeros(self.mesh.vertex_count, bool)
+        frozen[self.frozen] = True
+        faces = np.asarray(self.mesh.faces)
+        awake = self._welded_mask(~frozen)
+        for _ in range(FREEZE_RINGS + 1):  # a hinge or a bending spring reaches two rings
+            awake[faces[awake[faces].any(axis=1)].ravel()] = True
+            awake = self._welded_mask(awake)
+        ids = np.flatnonzero(frozen & ~awake)
+        near = cKDTree(x[self.garment_vertices(garment)]).query(x[ids], distance_upper_bound=reach)[0]
+        far = ids[~np.isfinite(near)]
+        if not len(far):
+            return state
+        self.asleep = far
+        return self.rebuild(state)
+
+    def _welded_mask(self, mask) -> np.ndarray:
+        """(mesh vertices,) bool ``mask`` spread to every copy of a welded vertex one of whose copies has it."""
+        welded = np.zeros(int(self.weld.max()) + 1, bool)
+        welded[self.weld[mask]] = True
+        return welded[self.weld]
 
     def garment_vertices(self, k: int) -> np.ndarray:
         """Mesh vertices of the outfit's garment ``k`` (every vertex for a single garment)."""
@@ -285,7 +324,7 @@ class Garment:
         ids = self.attached
         self.gravity = True
         self.waiting = np.zeros(0, np.intp)  # every garment sewn
-        self.frozen = np.zeros(0, np.intp)  # and free
+        self.frozen = self.asleep = np.zeros(0, np.intp)  # and free
         self.gathered = np.zeros(0, np.intp)  # a tucked garment's gathered cloth is free again, under the band
         if len(ids):
             dist, tri, bary, _ = collider.nearest(state.x[self.weld[ids]], pose, 0, cache=False)

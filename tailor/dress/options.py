@@ -20,7 +20,7 @@ from ..tearing import Cut
 
 __all__ = ["DrapeOptions", "PhaseSettings", "SEWING", "SETTLE_QUALITY", "SETTLE_STEP_PER_RESOLUTION", "SETTLE_RAMP", "settle_step", "SETTLING", "TRANSITION", "MOTION", "DRAPE_RESOLUTION", "FREE_SEW_STEP",
            "NEAR_SEAM", "ANCHORED_NEAR", "NEAR_RATE", "COMPRESSION", "TRANSITION_S", "TRANSITION_SPEED", "TRANSITION_KEYS_PER_S", "transition_seconds", "STRAGGLERS", "MIN_STRAGGLERS",
-           "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "FREEZE_STRETCH", "FREEZE_RINGS", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
+           "STRAGGLER_REACH", "BLOCKED_OVER", "WELD_BATCH", "REST_SPEED", "REST_FRAMES", "FREEZE_STRETCH", "FREEZE_RINGS", "SLEEP_REACH", "MOTION_MAX_STRETCH", "MOTION_STRETCH_GROWTH", "ROUTE_BEYOND", "ROUTE_AFTER",
            "TUCK_BELOW", "TUCK_GATHER_TIME", "TUCK_ROW"]
 
 DRAPE_RESOLUTION = 0.02
@@ -95,6 +95,11 @@ triangles stretched beyond this (principal stretch; :meth:`~tailor.dress.garment
 
 FREEZE_RINGS = 2
 """Rings of triangles round those left free with them."""
+
+SLEEP_REACH = 0.15
+"""[m] Held inner garments' cloth farther than this from every vertex of the outer garment sewing over
+them is taken out of the model for that stage (:meth:`~tailor.dress.garment.Garment.sleep_far`): the
+outer garment, gravity off, moves less than this while it sews."""
 
 WELD_BATCH = 0.2
 """Merged seam pairs are welded (the garment's model rebuilt: the model, the self-collider and a

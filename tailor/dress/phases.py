@@ -28,7 +28,7 @@ from ..outfit import garment_of_vertex, out_of_order, tuck_targets
 from ..sim import Guard, Stepper, max_stretch, most_stretched
 from ..topology import boundary_edges
 from .options import (BLOCKED_OVER, FREE_SEW_STEP, MIN_STRAGGLERS, MOTION, MOTION_MAX_STRETCH, MOTION_STRETCH_GROWTH, REST_FRAMES, REST_SPEED, ROUTE_AFTER,
-                      ROUTE_BEYOND, SETTLING, SEWING, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
+                      ROUTE_BEYOND, SETTLING, SEWING, SLEEP_REACH, STRAGGLER_REACH, STRAGGLERS, TRANSITION, TUCK_BELOW, TUCK_GATHER_TIME,
                       TUCK_ROW, WELD_BATCH, DrapeOptions, PhaseSettings)
 from .report import DrapeFrame, DrapeProgress, PhaseReport
 
@@ -219,6 +219,7 @@ def sew(d: Dressing, x0):
             state = g.sew_stage(state, stage)
             if stage.dresses and stage.garment:
                 state = _dress_over(d, state, stage.garment)
+            state = g.sleep_far(state, stage.garment, SLEEP_REACH)
             sewing.merge_distance = merge_distance
             d.contacts.follow(g.friction, state.x)
             d.constrain()

@@ -161,7 +161,8 @@ class Model:
     def prefix(self, count: int) -> "Model":
         """The model of its first ``count`` vertices: every triangle, hinge, spring and pair among
         them, nothing joining them to the rest (an outfit's garments inside the one sewing, its
-        outer garments left out until their stage; they must share no element with the first)."""
+        outer garments left out until their stage). A triangle joining the two parts may only join
+        pinned vertices of the first to the rest (the forces it drops move nothing)."""
         count = int(count)
         if count >= self.vertex_count:
             return self
@@ -169,7 +170,8 @@ class Model:
         hinges = np.all(self.hinge_vertices < count, axis=1)
         springs = np.all(self.spring_vertices < count, axis=1)
         pairs = np.all(self.pair_vertices < count, axis=1)
-        if not (np.all(self.faces >= count, axis=1) | faces).all():
+        joining = self.faces[~faces & np.any(self.faces < count, axis=1)]
+        if not self.vertex_pinned[joining[joining < count]].all():
             raise ValueError(f"a triangle joins the first {count} vertices to the rest: they cannot be simulated apart")
         fields = {name: getattr(self, name)[faces] for name in (
             "faces", "face_panel", "face_rest_area", "face_dm_inv", "face_stretch_warp", "face_stretch_weft",
