@@ -344,6 +344,36 @@ def test_edge_directions_are_the_inner_edges_summed_outward_normals_and_zero_whe
     np.testing.assert_allclose(got, expect, rtol=1e-12, atol=1e-18)
 
 
+def test_an_inner_garment_caught_over_an_outer_fold_goes_back_under_it_by_its_own_side():
+    """An outer garment's fold turns its faces over (a circle skirt's hem landing on trousers): the
+    side an inner vertex belongs on is read from the inner cloth round it (Layers.vertex_triangle_sides),
+    so an inner panel caught a millimetre over an outer panel lying face down goes back under it,
+    where the outer panel's own side (its winding as placed) put it over, and side memory kept it;
+    a triangle standing perpendicular to the vertex's normal leaves the pair its remembered side."""
+    from tailor.collide import Layers
+
+    model, x0 = stacked(-0.001, 0.0, offset=0.0, size=0.1, resolution=0.02)  # the outer panel 1 mm under the inner
+    outer = panel_vertices(model, 1)
+    tri = x0[model.faces]
+    up = np.where(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])[:, 2] > 0, 1, -1).astype(np.int8)
+    layers = Layers(model.face_panel.astype(np.int64), up)  # as placed: both panels' windings face out (+z)
+    x0[outer, 0] *= -1.0  # the outer panel turned over where it lies: its faces now face the body (−z)
+    vertex_layer = layers.vertex_layer(model.faces, model.vertex_count)
+    inner_v, outer_t = np.flatnonzero(~outer), np.flatnonzero(model.face_panel == 1)
+    vtx, tris = np.repeat(inner_v, len(outer_t)), np.tile(outer_t, len(inner_v))
+    assert (layers.vertex_triangle_sides(vertex_layer, model.faces, vtx, tris, x0) == 1).all()  # the winding's side: under
+    standing = x0.copy()
+    standing[outer, 1], standing[outer, 2] = 0.0, x0[outer, 1]  # the outer panel stood up in the x–z plane
+    assert (layers.vertex_triangle_sides(vertex_layer, model.faces, vtx, tris, standing) == 0).all()
+    ends = []
+    for rule in (None, layers):
+        state = model.state(x0.copy())
+        collider = SelfCollider(model.faces, model.face_panel, x0, thickness=0.003, mode="on", layers=rule)
+        assert collider.respond(1.0 / np.asarray(model.vertex_mass), state, 0.01) > 0
+        ends.append(state.x[~outer, 2].mean() - state.x[outer, 2].mean())
+    assert ends[1] < -0.002 < 0.0 < ends[0]
+
+
 def test_cloth_contact_holds_the_vertices_pinned_now(monkeypatch):
     # pins change without the vertex count changing (attachments at settling, an outfit's garment
     # released after waiting to sew): cloth-cloth contact must not move a pinned vertex, nor keep

@@ -284,7 +284,7 @@ class SelfCollider:
         vertex, tri, near, ee, ee_near = vertex[keep_vt], tri[keep_vt], near[keep_vt], ee[keep_ee], ee_near[keep_ee]
         vertex, tri, near, ee, ee_near = self._seams.drop(self.faces, vertex, tri, near, ee, ee_near)
         vertex, tri, near, ee, ee_near = self._still.drop(self.faces, vertex, tri, near, ee, ee_near)
-        tri_side = self._tri_sides(vertex, tri)
+        tri_side = self._tri_sides(x, vertex, tri)
         if dirty is not None:  # the kept candidates: no end moved
             keep = ~touching_vt(self._vtx, self._tri, self.faces, dirty)
             vertex, tri, near, tri_side = (np.concatenate([a[keep], b]) for a, b in
@@ -321,11 +321,11 @@ class SelfCollider:
         return edge_edge_pairs(ids, self._edges, lo, hi, radius, self._grid_cell, self._ring_csr,
                                dirty=dirty, patch_pairs=patch_pairs, room=self._rooms[1], pad=pad)
 
-    def _tri_sides(self, vertex, tri):
-        """Each vertex–triangle candidate's fixed side (:class:`Layers`; none for a single garment)."""
+    def _tri_sides(self, x, vertex, tri):
+        """Each vertex–triangle candidate's fixed side at ``x`` (:class:`Layers`; none for a single garment)."""
         if self.layers is None:
             return np.zeros(len(tri), np.int8)
-        return self.layers.vertex_triangle_sides(self._garment, self.faces, vertex, tri)
+        return self.layers.vertex_triangle_sides(self._garment, self.faces, vertex, tri, x)
 
     def _edge_directions(self, x, ee):
         """Each edge–edge candidate's outward direction at ``x`` (:class:`Layers`; a single garment: one zero row for all)."""

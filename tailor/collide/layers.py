@@ -10,7 +10,12 @@ from numba import njit
 
 from ..geometry import vertex_normals
 
-__all__ = ["Layers"]
+__all__ = ["Layers", "INNER_SIDE_COS"]
+
+INNER_SIDE_COS = 0.25
+"""An inner vertex's side of an outer triangle is judged only where the triangle's normal and the
+vertex's outward normal are within acos(0.25) ≈ 75° of parallel or antiparallel
+(:meth:`Layers.vertex_triangle_sides`); nearer perpendicular the pair keeps its side."""
 
 
 @dataclass(frozen=True)
@@ -62,12 +67,26 @@ class Layers:
         out[faces] = np.asarray(self.face_layer)[:, None]
         return out
 
-    def vertex_triangle_sides(self, vertex_layer, faces, vtx, tri) -> np.ndarray:
-        """(V,) int8 per vertex–triangle pair: the side of the triangle's winding normal the vertex
-        belongs on (±1), 0 within one garment or where either is loose against the other."""
+    def vertex_triangle_sides(self, vertex_layer, faces, vtx, tri, x) -> np.ndarray:
+        """(V,) int8 per vertex–triangle pair at ``x``: the side of the triangle's winding normal the
+        vertex belongs on (±1), 0 within one garment or where either is loose against the other.
+
+        A vertex of the outer garment belongs on the side of the inner triangle its ``face_out``
+        names. A vertex of the inner garment belongs on the side of the outer triangle the body is
+        on, and that is read from the inner garment's own cloth round the vertex (its faces' normals
+        turned out by ``face_out``), not from the outer panel's ``face_out``: an outer garment's
+        folds turn its faces over (a circle skirt's hem landing on trousers' legs folds back on
+        itself, and its panel's side then pushed the trousers through the fold's under layer and
+        tore it). Where the triangle stands within :data:`INNER_SIDE_COS` of perpendicular to the
+        vertex's normal the pair keeps the side it is on (0)."""
         lv, lt = vertex_layer[vtx], np.asarray(self.face_layer)[tri]
         out = np.asarray(self.face_out, np.int8)[tri]
-        side = np.where(lv > lt, out, np.where(lv < lt, -out, 0)).astype(np.int8)
+        side = np.where(lv > lt, out, 0).astype(np.int8)
+        inner = lv < lt
+        if inner.any():
+            _inner_sides(np.ascontiguousarray(vtx, np.int64), np.ascontiguousarray(tri, np.int64), inner,
+                         np.ascontiguousarray(faces, np.int64), np.asarray(self.face_out, np.int64),
+                         np.ascontiguousarray(x, np.float64), INNER_SIDE_COS, side)
         if self.loose is not None:
             free = (self.loose[vtx] == lt) | (self.loose[faces[tri]] == lv[:, None]).any(axis=1)
             side[free] = 0
@@ -125,3 +144,41 @@ def _edge_directions(pairs, layer, loose, faces, face_out, x, out):
         else:
             for d in range(3):
                 out[k, d] = -(normal[a0, d] + normal[a1, d])
+
+
+@njit(cache=True)
+def _face_normal(x, faces, f, s):
+    """Face ``f``'s winding normal at ``x`` (twice its area long), times ``s``."""
+    i, j, k = faces[f, 0], faces[f, 1], faces[f, 2]
+    u0, u1, u2 = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]
+    w0, w1, w2 = x[k, 0] - x[i, 0], x[k, 1] - x[i, 1], x[k, 2] - x[i, 2]
+    return (u1 * w2 - u2 * w1) * s, (u2 * w0 - u0 * w2) * s, (u0 * w1 - u1 * w0) * s
+
+
+@njit(cache=True)
+def _inner_sides(vtx, tri, pick, faces, face_out, x, cos_min, side):
+    """:meth:`Layers.vertex_triangle_sides` of the pairs ``pick`` (an inner vertex, an outer triangle)
+    into ``side``: −1 where the triangle's winding normal points the way the vertex's outward normal
+    does (the vertex belongs behind it), +1 where it points against it, 0 near perpendicular."""
+    needed = np.zeros(len(x), np.bool_)
+    for k in range(len(vtx)):
+        if pick[k]:
+            needed[vtx[k]] = True
+    normal = np.zeros((len(x), 3))
+    for f in range(len(faces)):
+        if not (needed[faces[f, 0]] or needed[faces[f, 1]] or needed[faces[f, 2]]):
+            continue
+        n0, n1, n2 = _face_normal(x, faces, f, float(face_out[f]))
+        for c in range(3):
+            v = faces[f, c]
+            normal[v, 0] += n0
+            normal[v, 1] += n1
+            normal[v, 2] += n2
+    for k in range(len(vtx)):
+        if not pick[k]:
+            continue
+        t0, t1, t2 = _face_normal(x, faces, tri[k], 1.0)
+        v = vtx[k]
+        d = t0 * normal[v, 0] + t1 * normal[v, 1] + t2 * normal[v, 2]
+        size = np.sqrt((t0 * t0 + t1 * t1 + t2 * t2) * (normal[v, 0] ** 2 + normal[v, 1] ** 2 + normal[v, 2] ** 2))
+        side[k] = 0 if size <= 0.0 or abs(d) < cos_min * size else (1 if d < 0.0 else -1)
