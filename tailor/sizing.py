@@ -230,8 +230,30 @@ def scaled_panel(panel, sx, sy):
     def edges(loop):
         return tuple(replace(e, curve=_scale_curve(e.curve, f)) for e in loop)
 
-    return replace(panel, vertices=tuple(tuple(map(float, f(np.asarray(v, float)))) for v in panel.vertices),
-                   edges=edges(panel.edges), holes=tuple(edges(h) for h in panel.holes), placement=placement)
+    out = replace(panel, vertices=tuple(tuple(map(float, f(np.asarray(v, float)))) for v in panel.vertices),
+                  edges=edges(panel.edges), holes=tuple(edges(h) for h in panel.holes), placement=placement)
+    if isinstance(pl, LandmarkPlacement) and pl.anchor is not None:
+        out = replace(out, placement=replace(placement, anchor=_on_outline(pl.anchor, panel, out)))
+    return out
+
+
+def _on_outline(anchor, panel, scaled):
+    """``anchor`` of ``panel`` on ``scaled``'s outline where it lay on ``panel``'s (else as it is).
+
+    The anchor is the scaling's pivot, so a straight edge through it stays through it; a circular
+    edge is rescaled as a circle (:func:`_scale_curve`), and its new arc passes beside the pivot: a
+    circle skirt's waist, eased over trousers, ran 1 cm below its anchor, which then no longer named
+    the skirt's waist arc and the skirt was rolled instead of laid on its cone."""
+    from .curves import sample_curve
+
+    def outline(p):
+        return np.concatenate([sample_curve(e.curve, np.linspace(0.0, 1.0, 257)) for e in p.edges])
+
+    a = np.asarray(anchor, float)
+    if np.linalg.norm(outline(panel) - a, axis=1).min() > 1e-3:
+        return anchor
+    new = outline(scaled)
+    return tuple(map(float, new[np.argmin(np.linalg.norm(new - a, axis=1))]))
 
 
 def _match_seams(pattern, graded, scales):

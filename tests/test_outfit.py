@@ -345,6 +345,41 @@ def test_a_skirt_over_trousers_keeps_its_layer(resolution, frames):
     assert np.count_nonzero(garment == 1) > 500
 
 
+def test_a_circle_skirt_eased_over_trousers_keeps_its_waist_arc_and_its_cone():
+    """Easing widens a circle skirt's waist over the trousers' band; its anchor, the scaling's pivot,
+    is put on the rescaled waist arc (it ran 1 cm off it, the arc was no longer found and the skirt
+    was rolled round the body instead of laid on its cone, where its side seams crumpled while
+    sewing and tore at 2 cm)."""
+    from tailor.dress import measure_body
+    from tailor.outfit import ease_layers
+    from tailor.placement import _waist_arc
+
+    body = read_body("mannequin")
+    eased = ease_layers(outfit(_patterns("trousers", "circle_skirt")), measure_body(body, body.frames[0]), 0.004)
+    skirt = [p for p in eased.panels if p.name.startswith("circle_skirt/skirt_")]
+    plain = {p.name: p for p in _patterns("circle_skirt")[0].panels}
+    assert len(skirt) == 2
+    for panel in skirt:
+        arc = _waist_arc(panel, np.asarray(panel.placement.anchor))
+        was = _waist_arc(plain[panel.name.split("/")[1]], np.asarray(plain[panel.name.split("/")[1]].placement.anchor))
+        assert arc is not None and arc[1] > was[1] * 1.01  # the waist arc found, and eased
+
+
+@pytest.mark.parametrize("resolution,frames", [(0.03, 1), pytest.param(0.02, 5, marks=pytest.mark.slow)])
+def test_a_circle_skirt_falling_onto_trousers_folds_over_them_without_crossing(resolution, frames):
+    """A circle skirt over trousers, laid on its cone, falls onto the trousers' legs as it settles and
+    folds back on itself there. The layer rule read an inner vertex's side of an outer triangle from
+    the skirt panel's side: a fold's under layer faces the body, so the rule pushed the trousers
+    through it; 16 → 629 crossings within four frames and a triangle stretched 15× at 3 cm. Now the
+    inner cloth's own side decides (Layers.vertex_triangle_sides)."""
+    from tailor import drape
+
+    report = drape(_patterns("trousers", "circle_skirt"), read_body("mannequin-walk"), resolution=resolution, frames=frames).report
+    assert max(report.crossings_per_frame) == 0
+    assert report.out_of_layer_per_frame == [0] * frames
+    assert report.max_penetration_m <= 0.001
+
+
 def test_each_stage_of_an_outfit_sews_at_the_step_its_own_garment_allows():
     """A stage holding its garment's heights (the trousers' band) sews at the plain step; the T-shirt
     over them, holding none of its own, at the longer free step, as it does alone."""
