@@ -229,7 +229,7 @@ class Sewing:
         """
         gap = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
         if weld is not None and len(self.anchored):
-            held = np.zeros(len(x), bool)
+            held = np.zeros(max(len(x), int(weld.max()) + 1), bool)  # welded vertices out of the model numbered last
             held[weld[self.anchored]] = True
             near = np.where(held[pairs[:, 0]] != held[pairs[:, 1]], anchored_near, near)
         m = 0.5 * (mass[pairs[:, 0]] + mass[pairs[:, 1]])
