@@ -44,7 +44,7 @@ import numpy as np
 
 from .errors import PatternError
 from .geometry import vertex_normals
-from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSide, validate_pattern
+from .pattern import Attachment, LandmarkPlacement, Pattern, Piece, Seam, SeamSide, TransformPlacement, validate_pattern
 from .placement import LAYER_GAP
 from .sizing import loop_girth, pattern_loops, scaled_panel
 
@@ -104,10 +104,17 @@ def outfit(patterns, *, name: str | None = None, tuck: bool = False) -> Pattern:
 
 
 def _raised(placement, rise: float):
-    """A landmark placement ``rise`` [m] higher (other placements as they are)."""
-    if not rise or not isinstance(placement, LandmarkPlacement):
+    """A placement ``rise`` [m] higher: a landmark placement's offset, a rigid one's translation (a
+    GarmentCode skirt's band, left at its pants' band's height, crossed it as settling began and
+    tore a band triangle 20×)."""
+    if not rise:
         return placement
-    return replace(placement, offset=placement.offset + rise)
+    if isinstance(placement, LandmarkPlacement):
+        return replace(placement, offset=placement.offset + rise)
+    if isinstance(placement, TransformPlacement):
+        x, y, z = placement.translation
+        return replace(placement, translation=(x, y, z + rise))
+    return placement
 
 
 def ease_layers(pattern: Pattern, landmarks, spacing: float) -> Pattern:

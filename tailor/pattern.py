@@ -255,7 +255,7 @@ class Piece:
     ``layer`` orders the garments (larger is further out); ``clearance`` [m] is what its placement
     adds to its panels' own: the room the garments inside it take; ``ease`` is how much wider across
     its loops that lie over another garment's were made (:func:`tailor.outfit.ease_layers`; 1: as drafted);
-    ``rise`` [m] how much higher than drafted its landmark placements put it (:data:`tailor.outfit.ATTACH_RISE`);
+    ``rise`` [m] how much higher than drafted its placements put it (:data:`tailor.outfit.ATTACH_RISE`);
     ``tucks``: the garments inside it are tucked into it (``outfit(..., tuck=True)``).
     """
 

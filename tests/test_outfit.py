@@ -227,6 +227,8 @@ def test_held_cloth_far_from_the_garment_sewing_sleeps_out_of_the_model_without_
     assert g.model.vertex_count == len(np.unique(g.weld[g.live])) < whole.vertex_count
     np.testing.assert_allclose(g.frame(state), x, rtol=0, atol=1e-12)
     np.testing.assert_allclose(total_forces(g.model, state)[g.weld[free]], before, rtol=1e-9, atol=1e-12)
+    g.sewing.anchor(g.garment_vertices(0))  # a held band among the sleepers (GarmentCode's pants under its T-shirt)
+    g.stiffen_near_pairs(state.x)
     state.x += 0.01  # the model moves; the sleepers stay
     asleep, awake = g.asleep, g.live
     state = g.sew_stage(state, second)
@@ -420,6 +422,26 @@ def test_an_outer_garment_held_where_an_inner_one_is_held_is_raised_and_held_a_l
     assert set(layer.tolist()) == {0, 1}
     assert held.offset[layer == 0].min() >= g.thickness - 1e-12
     assert held.offset[layer == 1].min() >= 2 * g.thickness - 1e-12
+
+
+@pytest.mark.parametrize("resolution,frames", [(0.03, 2), pytest.param(0.02, 5, marks=pytest.mark.slow)])
+def test_garmentcodes_circle_skirt_over_its_pants_is_raised_and_keeps_its_layer(garmentcode_dir, resolution, frames):
+    """GarmentCode's panels are placed rigidly (translation and rotation): the skirt's, held at the
+    waist where the pants are, are raised ATTACH_RISE as landmark placements are. Left at the pants'
+    height, the two bands' top edges lay edge to edge and crossed as settling began (a band triangle
+    stretched 20×)."""
+    from tailor import drape
+    from tailor.outfit import ATTACH_RISE
+
+    pants, skirt = (read_pattern(garmentcode_dir / f"{n}_specification.json") for n in ("pants", "skirt_circle"))
+    pattern = outfit([pants, skirt])
+    assert [p.rise for p in pattern.pieces] == [0.0, ATTACH_RISE]
+    for p, q in zip(skirt.panels, pattern.panels[len(pants.panels):]):
+        assert q.placement.translation[2] == pytest.approx(p.placement.translation[2] + ATTACH_RISE)
+        assert q.placement.translation[:2] == p.placement.translation[:2]
+    report = drape([pants, skirt], read_body("mannequin-walk"), resolution=resolution, frames=frames).report
+    assert max(report.crossings_per_frame) == 0 and report.out_of_layer_per_frame == [0] * frames
+    assert report.max_penetration_m <= 0.001
 
 
 @pytest.mark.parametrize("resolution,frames", [(0.04, 1), pytest.param(0.02, 5, marks=pytest.mark.slow)])
