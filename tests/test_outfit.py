@@ -235,6 +235,12 @@ def test_held_cloth_far_from_the_garment_sewing_sleeps_out_of_the_model_without_
     assert not len(g.asleep) and g.model.vertex_count == whole.vertex_count
     np.testing.assert_allclose(g.frame(state)[asleep], x[asleep])
     np.testing.assert_allclose(g.frame(state)[awake], x[awake] + 0.01)
+    state = g.sleep_far(state, 1, 0.02)  # the trousers' band asleep too when settling attaches the outfit
+    assert np.isin(g.attached, g.asleep).any()
+    x = g.frame(state)
+    state, held = g.attach(state, d.contacts.body, d.timeline.pose)
+    assert not len(g.asleep) and g.model.vertex_count == whole.vertex_count and len(held.ids) > 0
+    np.testing.assert_allclose(g.frame(state), x, rtol=0, atol=1e-12)
 
 
 def test_an_outer_loop_is_eased_to_keep_its_own_ease_over_the_inner_loop():

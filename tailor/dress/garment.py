@@ -321,13 +321,13 @@ class Garment:
         """Gravity on, the pattern's attachments pinned where they lie on the body (Eq. 19–20).
 
         Returns (state of the rebuilt model, :class:`~tailor.contact.Attachments` or None)."""
-        ids = self.attached
+        ids, x = self.attached, self.frame(state)  # every mesh vertex's place, those out of the model too
         self.gravity = True
         self.waiting = np.zeros(0, np.intp)  # every garment sewn
         self.frozen = self.asleep = np.zeros(0, np.intp)  # and free
         self.gathered = np.zeros(0, np.intp)  # a tucked garment's gathered cloth is free again, under the band
         if len(ids):
-            dist, tri, bary, _ = collider.nearest(state.x[self.weld[ids]], pose, 0, cache=False)
+            dist, tri, bary, _ = collider.nearest(x[ids], pose, 0, cache=False)
             ok = tri >= 0
             self.pins = ids[ok]
         state = self.rebuild(state)
