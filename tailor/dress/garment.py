@@ -83,6 +83,7 @@ class Garment:
         self.gathered = np.zeros(0, np.intp)  # mesh vertices tucked under a band while it sews, carried by a Gather
         self.frozen = np.zeros(0, np.intp)  # mesh vertices of sewn inner garments held still while an outer one sews
         self.asleep = np.zeros(0, np.intp)  # frozen mesh vertices out of the model too, far from the garment sewing (sleep_far)
+        self._sleepers = None  # a k-d tree of the asleep vertices' places (they do not move), or None
         self._tuck = None  # (mesh vertices tucked, the garment tucking them) once a band closed over them
         self.gravity = False
         self.rebuilds = 0
@@ -229,7 +230,7 @@ class Garment:
         nothing until they sew), and those inside, sewn, are held still (:meth:`_frozen_under`).
         Returns the state of the rebuilt model."""
         self.sewing.sew_only(stage.sewing)
-        self.waiting, self.asleep = stage.waiting, np.zeros(0, np.intp)
+        self.waiting, self.asleep, self._sleepers = stage.waiting, np.zeros(0, np.intp), None
         self.frozen = self._frozen_under(stage.garment, state.x)
         state = self.rebuild(state)
         state.v[np.unique(self.weld[self.frozen])] = 0.0
@@ -261,23 +262,37 @@ class Garment:
         that moves, taken out of the model like the garments waiting outside (:attr:`asleep`): held
         still, they cost the stage's forces, solve and contacts nothing (trousers' legs under a
         T-shirt sewing at the hips). The elements they drop join held vertices alone. Returns the
-        state of the rebuilt model (the same if none is far)."""
-        if not len(self.frozen):
-            return state
+        state of the model rebuilt if the sleepers changed (else ``state``)."""
+        far = np.zeros(0, np.intp)
         x = self.frame(state)
-        frozen = np.zeros(self.mesh.vertex_count, bool)
-        frozen[self.frozen] = True
-        faces = np.asarray(self.mesh.faces)
-        awake = self._welded_mask(~frozen)
-        for _ in range(FREEZE_RINGS + 1):  # a hinge or a bending spring reaches two rings
-            awake[faces[awake[faces].any(axis=1)].ravel()] = True
-            awake = self._welded_mask(awake)
-        ids = np.flatnonzero(frozen & ~awake)
-        near = cKDTree(x[self.garment_vertices(garment)]).query(x[ids], distance_upper_bound=reach)[0]
-        far = ids[~np.isfinite(near)]
-        if not len(far):
+        if len(self.frozen):
+            frozen = np.zeros(self.mesh.vertex_count, bool)
+            frozen[self.frozen] = True
+            faces = np.asarray(self.mesh.faces)
+            awake = self._welded_mask(~frozen)
+            for _ in range(FREEZE_RINGS + 1):  # a hinge or a bending spring reaches two rings
+                awake[faces[awake[faces].any(axis=1)].ravel()] = True
+                awake = self._welded_mask(awake)
+            ids = np.flatnonzero(frozen & ~awake)
+            near = cKDTree(x[self.garment_vertices(garment)]).query(x[ids], distance_upper_bound=reach)[0]
+            far = ids[~np.isfinite(near)]
+        if np.array_equal(far, self.asleep):
             return state
         self.asleep = far
+        self._sleepers = cKDTree(x[far]) if len(far) else None
+        return self.rebuild(state)
+
+    def wake_near(self, state, garment: int, reach: float):
+        """The state of the model rebuilt with every sleeper (:meth:`sleep_far`) back in, for the rest of
+        the stage, once the outfit's ``garment`` has come within ⅔ of ``reach`` of one; None while it
+        keeps its distance: sewing may carry cloth far (GarmentCode's T-shirt on MakeHuman's
+        thin woman came within 1 mm of the pants' cloth asleep 15 cm from it, and crossed it unseen)."""
+        if self._sleepers is None:
+            return None
+        d = self._sleepers.query(self.frame(state)[self.garment_vertices(garment)], distance_upper_bound=2.0 * reach / 3.0)[0]
+        if not np.isfinite(d).any():
+            return None
+        self.asleep, self._sleepers = np.zeros(0, np.intp), None
         return self.rebuild(state)
 
     def _welded_mask(self, mask) -> np.ndarray:
@@ -325,6 +340,7 @@ class Garment:
         self.gravity = True
         self.waiting = np.zeros(0, np.intp)  # every garment sewn
         self.frozen = self.asleep = np.zeros(0, np.intp)  # and free
+        self._sleepers = None
         self.gathered = np.zeros(0, np.intp)  # a tucked garment's gathered cloth is free again, under the band
         if len(ids):
             dist, tri, bary, _ = collider.nearest(x[ids], pose, 0, cache=False)

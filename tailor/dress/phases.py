@@ -229,7 +229,7 @@ def sew(d: Dressing, x0):
         if d.placer is not None and sewing.block(g.frame(state), d.placer.inside, over=BLOCKED_OVER):  # over it from the start
             sewing.route_around(meet, beyond=ROUTE_BEYOND, stuck=False)
         while sewing.sewing_count and t < d.options.sew_timeout:
-            state = _sew_frame(d, state)
+            state = _wake_near(d, _sew_frame(d, state), stage.garment)
             t += d.frame_dt
             frames += 1
             _widen_merging(sewing, t, d.options)
@@ -255,6 +255,17 @@ def sew(d: Dressing, x0):
     return state, PhaseReport(total, time.perf_counter() - t0, frames,
                               {"max_gap_at_merge_m": sewing.max_gap_at_merge, "rebuilds": g.rebuilds, "max_triangle_stretch": worst,
                                "most_stretched_at_m": None if at is None else at.round(4).tolist()})
+
+
+def _wake_near(d: Dressing, state, garment: int):
+    """``state``, or, if the outfit's ``garment`` came near held cloth asleep out of the model
+    (:meth:`Garment.wake_near`), that of the model with it back, the contacts following."""
+    woken = d.garment.wake_near(state, garment, SLEEP_REACH)
+    if woken is None:
+        return state
+    d.contacts.follow(d.garment.friction, woken.x)
+    d.constrain()
+    return woken
 
 
 def _sew_step(d: Dressing, garment: int) -> float | None:
