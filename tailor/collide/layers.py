@@ -121,19 +121,7 @@ def _edge_directions(pairs, layer, loose, faces, face_out, x, out):
             between[k] = True
             for m in range(4):
                 needed[pairs[k, m]] = True
-    normal = np.zeros((len(x), 3))
-    for f in range(len(faces)):
-        i, j, k = faces[f, 0], faces[f, 1], faces[f, 2]
-        if not (needed[i] or needed[j] or needed[k]):
-            continue
-        u0, u1, u2 = x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2]
-        w0, w1, w2 = x[k, 0] - x[i, 0], x[k, 1] - x[i, 1], x[k, 2] - x[i, 2]
-        s = float(face_out[f])
-        n0, n1, n2 = (u1 * w2 - u2 * w1) * s, (u2 * w0 - u0 * w2) * s, (u0 * w1 - u1 * w0) * s
-        for c in (i, j, k):
-            normal[c, 0] += n0
-            normal[c, 1] += n1
-            normal[c, 2] += n2
+    normal = _outward_normals(x, faces, face_out, needed)
     for k in range(len(pairs)):
         if not between[k]:
             continue
@@ -156,14 +144,9 @@ def _face_normal(x, faces, f, s):
 
 
 @njit(cache=True)
-def _inner_sides(vtx, tri, pick, faces, face_out, x, cos_min, side):
-    """:meth:`Layers.vertex_triangle_sides` of the pairs ``pick`` (an inner vertex, an outer triangle)
-    into ``side``: −1 where the triangle's winding normal points the way the vertex's outward normal
-    does (the vertex belongs behind it), +1 where it points against it, 0 near perpendicular."""
-    needed = np.zeros(len(x), np.bool_)
-    for k in range(len(vtx)):
-        if pick[k]:
-            needed[vtx[k]] = True
+def _outward_normals(x, faces, face_out, needed):
+    """(N, 3): at the ``needed`` vertices, the sum of their faces' area-weighted normals turned out by
+    ``face_out`` (faces in order, as :func:`vertex_normals` sums them); zero elsewhere."""
     normal = np.zeros((len(x), 3))
     for f in range(len(faces)):
         if not (needed[faces[f, 0]] or needed[faces[f, 1]] or needed[faces[f, 2]]):
@@ -174,6 +157,19 @@ def _inner_sides(vtx, tri, pick, faces, face_out, x, cos_min, side):
             normal[v, 0] += n0
             normal[v, 1] += n1
             normal[v, 2] += n2
+    return normal
+
+
+@njit(cache=True)
+def _inner_sides(vtx, tri, pick, faces, face_out, x, cos_min, side):
+    """:meth:`Layers.vertex_triangle_sides` of the pairs ``pick`` (an inner vertex, an outer triangle)
+    into ``side``: −1 where the triangle's winding normal points the way the vertex's outward normal
+    does (the vertex belongs behind it), +1 where it points against it, 0 near perpendicular."""
+    needed = np.zeros(len(x), np.bool_)
+    for k in range(len(vtx)):
+        if pick[k]:
+            needed[vtx[k]] = True
+    normal = _outward_normals(x, faces, face_out, needed)
     for k in range(len(vtx)):
         if not pick[k]:
             continue
