@@ -134,8 +134,7 @@ class Garment:
         if self.sewing.open_count:
             pairs = self.sewing.open_pairs(new)
             m = m.with_pairs(pairs, np.zeros(len(pairs)), np.zeros(len(pairs)))
-        live = self.live
-        count = int(new[live].max()) + 1 if not live.all() else int(new.max()) + 1
+        count = int(new[self.live].max()) + 1  # the rest (waiting, asleep) are numbered last
         self.weld, self.model, self._parked = new, m.prefix(count), xw[count:]
         self.friction = self._panel_friction[self.mesh.vertex_panel[np.unique(new, return_index=True)[1]]][:count]
         self.rebuilds += 1

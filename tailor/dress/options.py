@@ -98,8 +98,9 @@ FREEZE_RINGS = 2
 
 SLEEP_REACH = 0.15
 """[m] Held inner garments' cloth farther than this from every vertex of the outer garment sewing over
-them is taken out of the model for that stage (:meth:`~tailor.dress.garment.Garment.sleep_far`): the
-outer garment, gravity off, moves less than this while it sews."""
+them is taken out of the model for that stage (:meth:`~tailor.dress.garment.Garment.sleep_far`), and
+all of it is back once the outer garment comes within ⅔ of this of any
+(:meth:`~tailor.dress.garment.Garment.wake_near`)."""
 
 WELD_BATCH = 0.2
 """Merged seam pairs are welded (the garment's model rebuilt: the model, the self-collider and a
