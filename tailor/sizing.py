@@ -244,16 +244,23 @@ def _on_outline(anchor, panel, scaled):
     edge is rescaled as a circle (:func:`_scale_curve`), and its new arc passes beside the pivot: a
     circle skirt's waist, eased over trousers, ran 1 cm below its anchor, which then no longer named
     the skirt's waist arc and the skirt was rolled instead of laid on its cone."""
+    a = np.asarray(anchor, float)
+    if np.linalg.norm(_nearest_on_outline(panel, a) - a) > 1e-3:
+        return anchor
+    q = _nearest_on_outline(scaled, a)
+    return anchor if np.linalg.norm(q - a) < 1e-9 else tuple(map(float, q))
+
+
+def _nearest_on_outline(panel, point) -> np.ndarray:
+    """The point of ``panel``'s outline (each edge a polyline of 256 segments) nearest ``point``."""
     from .curves import sample_curve
 
-    def outline(p):
-        return np.concatenate([sample_curve(e.curve, np.linspace(0.0, 1.0, 257)) for e in p.edges])
-
-    a = np.asarray(anchor, float)
-    if np.linalg.norm(outline(panel) - a, axis=1).min() > 1e-3:
-        return anchor
-    new = outline(scaled)
-    return tuple(map(float, new[np.argmin(np.linalg.norm(new - a, axis=1))]))
+    lines = [sample_curve(e.curve, np.linspace(0.0, 1.0, 257)) for e in panel.edges]
+    p0 = np.concatenate([p[:-1] for p in lines])
+    d = np.concatenate([np.diff(p, axis=0) for p in lines])
+    t = np.clip(np.einsum("ij,ij->i", point - p0, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-30), 0.0, 1.0)
+    q = p0 + t[:, None] * d
+    return q[np.argmin(np.linalg.norm(q - point, axis=1))]
 
 
 def _match_seams(pattern, graded, scales):
