@@ -737,3 +737,74 @@ def test_nearly_parallel_edges_whose_common_normal_swings_are_never_read_as_cros
                      oi, oa, on, oh, hit, 0, np.arange(1))
     assert hit[0]
     assert (oa[0][:, None] * x[oi[0]]).sum(axis=0) @ on[0] == pytest.approx(0.00096, abs=2e-5)  # on the side it is on
+
+
+def _edge_pair_across_layers(memory_with_layers: bool):
+    """Two 4 mm edges 0.8 mm apart, one of an outer garment and one of the inner (its layer normal +z),
+    nearly parallel: their common normal n̂ stands 63° off the layer normal. The outer edge lies on
+    the +n̂ side of the inner one (the side the layers' +z leans it to) or on the −n̂ side."""
+    db = np.array([0.003, 0.0001, 0.0002])
+    n = np.cross([0.004, 0.0, 0.0], db)
+    n /= np.linalg.norm(n)
+    pb = np.array([0.002, 0.0, 0.0]) - (1.0 if memory_with_layers else -1.0) * 0.0008 * n
+    x = np.array([[0.0, 0.0, 0.0], [0.004, 0.0, 0.0], pb - 0.5 * db, pb + 0.5 * db])
+    return x, n
+
+
+@pytest.mark.parametrize("memory_with_layers", [True, False])
+def test_an_edge_pair_standing_off_the_layers_keeps_its_side_only_where_the_layers_agree(memory_with_layers):
+    """Layer rule, edge–edge: where two garments' edges have a common normal far from the layers'
+    normal (n̂·ẑ = 0.45 here) its sign says nothing of which side of the inner layer the outer edge
+    is on; forcing it (the rule before) shoved GarmentCode's skirts on MakeHuman's women sideways
+    through their pants step after step until a triangle tore. Such a pair keeps its remembered side
+    where that agrees with the layers, and is no contact where it does not (pushed along n̂ it
+    would be forced through the other edge)."""
+    from tailor.collide.cloth_kernels import detect_ee_serial
+
+    x, n = _edge_pair_across_layers(memory_with_layers)
+    assert 0.3 < abs(n[2]) < 0.9
+    oi, oa, on, oh = np.empty((1, 4), np.int64), np.empty((1, 4)), np.empty((1, 3)), np.empty(1)
+    hit = np.zeros(1, bool)
+    toward = np.array([[0.0, 0.0, 1.0]])  # the inner edge's outward normal: the outer edge belongs above it
+    detect_ee_serial(x, x, np.zeros((4, 3)), 0.002, np.array([[0, 1, 2, 3]]), np.zeros(1, bool), toward, 0.001, 0.006,
+                     oi, oa, on, oh, hit, 0, np.arange(1))
+    assert hit[0] == memory_with_layers
+    if memory_with_layers:
+        np.testing.assert_allclose(on[0], n, atol=1e-9)  # pushed apart the way it already is apart
+        assert (oa[0][:, None] * x[oi[0]]).sum(axis=0) @ on[0] == pytest.approx(0.0008, abs=1e-9)
+
+
+def _two_garment_squares(inner_z, outer_z):
+    """A 2 cm square of an inner garment (layer 0) at height ``inner_z`` and one of an outer garment
+    (layer 1) at ``outer_z``, both wound and turned out to face +z."""
+    from tailor.collide import Layers
+
+    square = np.array([[0.0, 0.0], [0.02, 0.0], [0.02, 0.02], [0.0, 0.02]])
+    x = np.vstack([np.column_stack([square, np.full(4, inner_z)]), np.column_stack([square, np.full(4, outer_z)])])
+    faces = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]])
+    return x, faces, Layers(np.array([0, 0, 1, 1]), np.ones(4, np.int8))
+
+
+def test_cloth_against_an_inner_garments_rim_keeps_its_side():
+    """Beyond an inner garment's open edge (a waistband's top) the outer one has no outside to be put
+    on: a skirt's band rising over the top of trousers' band lies on the body there. Against the
+    rim's triangles, and for the rim's own vertices against outer triangles, pairs keep their side
+    (forcing the skirt over the rim pumped the trousers' band until it tore). Layers.round_body
+    marks the rim: the vertices on the cloth's open edges."""
+    from tailor.collide import Layers
+
+    x, faces, plain = _two_garment_squares(0.0, 0.002)
+    vertex_layer = plain.vertex_layer(faces, len(x))
+    rim = np.zeros(len(x), bool)
+    rim[[2, 3]] = True  # the inner square's top edge
+    layers = Layers(plain.face_layer, plain.face_out, None, rim)
+    outer_on_rim = np.array([6, 6, 4]), np.array([0, 1, 1])  # triangle 0 and 1 touch the rim
+    inner_vs_outer = np.array([2, 1]), np.array([2, 2])  # a rim vertex and one off it, under outer triangle 2
+    for vtx, tri in (outer_on_rim, inner_vs_outer):
+        assert (plain.vertex_triangle_sides(vertex_layer, faces, vtx, tri, x) != 0).all()
+    assert (layers.vertex_triangle_sides(vertex_layer, faces, *outer_on_rim, x) == 0).all()
+    np.testing.assert_array_equal(layers.vertex_triangle_sides(vertex_layer, faces, *inner_vs_outer, x), [0, -1])
+    body = np.array([[0.0, 0.0, -0.1], [1.0, 0.0, -0.1], [0.0, 1.0, -0.1]])
+    made = Layers.round_body(plain.face_layer, np.array([0, 0, 1, 1]), x, faces, body, np.array([[0, 1, 2]]))
+    assert made.rim.all()  # every vertex of two lone squares is on an open edge
+

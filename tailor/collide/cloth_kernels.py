@@ -18,6 +18,12 @@ from .broad import run_starts
 __all__ = ["detect_vt", "detect_vt_serial", "detect_ee", "detect_ee_serial", "pair_motion", "resolve_contacts", "present",
            "unique_ints", "touching", "touching_vt", "NEAR_THICKNESS", "PARALLEL_PAIRS"]
 
+LAYER_EDGE_COS2 = 0.9 ** 2
+"""cos² of the largest angle (26°) between an edge pair's common normal and an outfit's layer normal
+at which the layer rule sets the pair's side (:func:`_ee_pair`); beyond it the normal lies too near
+the layers for its sign to say which side of them an edge is on (GarmentCode's garments layered on
+MakeHuman's bodies were shoved sideways by such pairs until they tore; docs/outfits.md)."""
+
 NEAR_THICKNESS = 0.25
 """Fraction of the thickness kept between a vertex and a triangle of its 1-ring (or two edges whose
 ends are neighbours): enough to stop a tight fold passing through itself, little enough not to
@@ -196,7 +202,11 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, ou
     (the normal is undefined) are left out; ``near`` pairs (ends
     in each other's 1-ring) keep a smaller distance, as in :func:`detect_vt`. A non-zero
     ``toward[k]`` overrides the side memory: edge a belongs on the side of edge b that vector points
-    to (an outfit's layers), as ``fixed`` does in :func:`_vt_pair`.
+    to (an outfit's layers), as ``fixed`` does in :func:`_vt_pair`, where the common normal lies
+    within acos(√:data:`LAYER_EDGE_COS2`) of that vector. Off it (edges near parallel, or one rising
+    out of its layer) the normal's sign says nothing of the layers and a forced side shoved the
+    cloth sideways step after step: such a pair keeps its side memory where that agrees with the
+    layers and is no contact where it does not (the vertex–triangle rule puts the cloth back).
     """
     slot = offset + k
     hit[slot] = False
@@ -232,10 +242,15 @@ def _ee_pair(k, x, xp, vel, dt, pairs, near, toward, thickness, reach, out_i, ou
     if turned * turned < SWUNG * _dot(n_prev, n_prev):
         g_prev = 0.0  # their common normal swung (nearly parallel edges): the side it gave is no memory
     side = (1.0 if g_prev > 0.0 else -1.0) if g_prev != 0.0 else (1.0 if g_now >= 0.0 else -1.0)
-    pull = _dot(n, (toward[k, 0], toward[k, 1], toward[k, 2]))
-    if pull != 0.0:
-        side = 1.0 if pull > 0.0 else -1.0
     h = NEAR_THICKNESS * thickness if near[k] else thickness
+    lay = (toward[k, 0], toward[k, 1], toward[k, 2])
+    lay2 = _dot(lay, lay)
+    if lay2 > 0.0:
+        pull = _dot(n, lay)
+        if pull * pull >= LAYER_EDGE_COS2 * lay2:
+            side = 1.0 if pull > 0.0 else -1.0
+        elif pull * side < 0.0:  # the common normal stands off the layers: memory, never against them
+            return
     if _classify(side * g_now, -1.5 * dt * side * rv_n, math.sqrt(moved2), h, reach):
         _store(slot, out_i, out_a, out_n, out_h, a0, a1, b0, b1, 1.0 - s, s, t - 1.0, -t,
                (side * n[0], side * n[1], side * n[2]), h)

@@ -9,6 +9,7 @@ import numpy as np
 from numba import njit
 
 from ..geometry import vertex_normals
+from ..topology import boundary_edges
 
 __all__ = ["Layers", "INNER_SIDE_COS"]
 
@@ -34,6 +35,13 @@ class Layers:
         Per vertex, a garment against which it keeps the side it is on (side memory, as within one
         garment), −1 for none: a tucked top's cloth above the band tucking it, which lies over the
         band there though it is the inner garment (:meth:`tailor.dress.garment.Garment.untucked`).
+    rim : (N,) bool, optional
+        The vertices on the garments' open edges (a waistband's top, a hem, an armhole). Against an
+        inner garment's rim the outer one keeps the side it is on: beyond the rim the inner garment
+        has no outside (a skirt's band rising over the top of trousers' band lies on the body there),
+        and forcing the outer cloth over the rim's triangles pumped the rim until it tore
+        (docs/outfits.md: GarmentCode's garments on MakeHuman's bodies). The report's layer count
+        exempts the same vertices (:func:`~tailor.outfit.out_of_order`).
 
     A contact between two garments keeps the outer one on the outer side, whatever side memory
     says (3ds Max cloth's layer rule as a one-sided constraint): a vertex of the outer garment on
@@ -43,6 +51,7 @@ class Layers:
     face_layer: np.ndarray
     face_out: np.ndarray
     loose: np.ndarray | None = None
+    rim: np.ndarray | None = None
 
     @classmethod
     def round_body(cls, face_layer, face_panel, x, faces, body_x, body_faces, loose=None) -> "Layers":
@@ -59,7 +68,9 @@ class Layers:
         nearest = cKDTree(body_x).query(tri.mean(axis=1))[1]
         vote = np.bincount(face_panel, weights=np.einsum("ij,ij->i", normal, body_normal[nearest]))
         out = np.where(vote[face_panel] >= 0.0, 1, -1).astype(np.int8)
-        return cls(np.asarray(face_layer, np.int64), out, None if loose is None else np.asarray(loose, np.int64))
+        rim = np.zeros(len(x), bool)
+        rim[boundary_edges(faces).ravel()] = True
+        return cls(np.asarray(face_layer, np.int64), out, None if loose is None else np.asarray(loose, np.int64), rim)
 
     def vertex_layer(self, faces, n: int) -> np.ndarray:
         """(N,) each vertex's garment (garments share no vertex)."""
@@ -90,6 +101,8 @@ class Layers:
         if self.loose is not None:
             free = (self.loose[vtx] == lt) | (self.loose[faces[tri]] == lv[:, None]).any(axis=1)
             side[free] = 0
+        if self.rim is not None:  # the inner one's rim: the triangle's (an outer vertex), the vertex (an inner one)
+            side[np.where(lv > lt, self.rim[faces[tri]].any(axis=1), self.rim[vtx])] = 0
         return side
 
     def edge_directions(self, vertex_layer, faces, x, pairs) -> np.ndarray:
@@ -103,6 +116,11 @@ class Layers:
             _edge_directions(np.ascontiguousarray(pairs, np.int64), np.asarray(vertex_layer, np.int64), loose,
                              np.ascontiguousarray(faces, np.int64), np.asarray(self.face_out, np.int64),
                              np.ascontiguousarray(x, np.float64), out)
+            if self.rim is not None:  # the inner edge on its garment's rim (``rim``)
+                pairs = np.asarray(pairs)
+                layer = np.asarray(vertex_layer)
+                inner = np.where((layer[pairs[:, 0]] < layer[pairs[:, 2]])[:, None], pairs[:, :2], pairs[:, 2:])
+                out[self.rim[inner].any(axis=1)] = 0.0
         return out
 
 
