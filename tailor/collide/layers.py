@@ -80,7 +80,8 @@ class Layers:
 
     def vertex_triangle_sides(self, vertex_layer, faces, vtx, tri, x) -> np.ndarray:
         """(V,) int8 per vertex–triangle pair at ``x``: the side of the triangle's winding normal the
-        vertex belongs on (±1), 0 within one garment or where either is loose against the other.
+        vertex belongs on (±1), 0 within one garment, where either is loose against the other or at
+        the inner garment's :attr:`rim`.
 
         A vertex of the outer garment belongs on the side of the inner triangle its ``face_out``
         names. A vertex of the inner garment belongs on the side of the outer triangle the body is
@@ -108,8 +109,9 @@ class Layers:
     def edge_directions(self, vertex_layer, faces, x, pairs) -> np.ndarray:
         """(E, 3) per edge pair (a0, a1, b0, b1): the direction edge a belongs in from edge b (the
         inner edge's outward normal, signed: the sum of its ends' area-weighted normals, each face's
-        turned out by ``face_out``), zero within one garment or where either is loose against the
-        other. Compiled: asked at every self-contact query of an outfit."""
+        turned out by ``face_out``), zero within one garment, where either is loose against the
+        other or where the inner edge touches its garment's :attr:`rim`. Compiled: asked at every
+        self-contact query of an outfit."""
         out = np.zeros((len(pairs), 3))
         loose = np.zeros(0, np.int64) if self.loose is None else np.asarray(self.loose, np.int64)
         if len(pairs):
