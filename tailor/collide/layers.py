@@ -114,22 +114,18 @@ class Layers:
         self-contact query of an outfit."""
         out = np.zeros((len(pairs), 3))
         loose = np.zeros(0, np.int64) if self.loose is None else np.asarray(self.loose, np.int64)
+        rim = np.zeros(0, np.bool_) if self.rim is None else np.asarray(self.rim, np.bool_)
         if len(pairs):
-            _edge_directions(np.ascontiguousarray(pairs, np.int64), np.asarray(vertex_layer, np.int64), loose,
+            _edge_directions(np.ascontiguousarray(pairs, np.int64), np.asarray(vertex_layer, np.int64), loose, rim,
                              np.ascontiguousarray(faces, np.int64), np.asarray(self.face_out, np.int64),
                              np.ascontiguousarray(x, np.float64), out)
-            if self.rim is not None:  # the inner edge on its garment's rim (``rim``)
-                pairs = np.asarray(pairs)
-                layer = np.asarray(vertex_layer)
-                inner = np.where((layer[pairs[:, 0]] < layer[pairs[:, 2]])[:, None], pairs[:, :2], pairs[:, 2:])
-                out[self.rim[inner].any(axis=1)] = 0.0
         return out
 
 
 @njit(cache=True)
-def _edge_directions(pairs, layer, loose, faces, face_out, x, out):
-    """:meth:`Layers.edge_directions` into ``out`` (``loose`` empty: none): the pairs between garments
-    first, then the normals at their ends only (faces in order, as :func:`vertex_normals` sums them)."""
+def _edge_directions(pairs, layer, loose, rim, faces, face_out, x, out):
+    """:meth:`Layers.edge_directions` into ``out`` (``loose``, ``rim`` empty: none): the pairs between
+    garments first, then the normals at their ends only (faces in order, as :func:`vertex_normals` sums them)."""
     between = np.zeros(len(pairs), np.bool_)
     needed = np.zeros(len(x), np.bool_)
     for k in range(len(pairs)):
@@ -137,6 +133,9 @@ def _edge_directions(pairs, layer, loose, faces, face_out, x, out):
         free = la == lb
         if not free and len(loose):
             free = loose[pairs[k, 0]] == lb or loose[pairs[k, 1]] == lb or loose[pairs[k, 2]] == la or loose[pairs[k, 3]] == la
+        if not free and len(rim):  # the inner edge on its garment's rim
+            i = 0 if la < lb else 2
+            free = rim[pairs[k, i]] or rim[pairs[k, i + 1]]
         if not free:
             between[k] = True
             for m in range(4):
